@@ -1,0 +1,34 @@
+//! Shared types of stucco, the software of an autonomous spray-plastering
+//! robot: the bottom of the crate graph, with no I/O and no clock.
+//!
+//! - [`Stamp`]: time, always passed in as an argument.
+//! - [`Pose2`], [`Twist2`]: rigid motions and velocities of the plane.
+//! - [`Scan`], [`Beam`]: one sweep of a scanning range-finder, with explicit
+//!   no-return marking.
+//! - [`LaserSpec`]: the range-finders of the source papers as presets
+//!   (IBEO Ladar-2D, Hokuyo URG, Hokuyo UTM-30, SICK LMS291).
+//!
+//! ```
+//! use stucco_core::{LaserSpec, Pose2, Scan, Stamp};
+//!
+//! let ibeo = LaserSpec::ibeo_ladar_2d();
+//! let scan = Scan::from_spec(&ibeo, Stamp::from_secs_f64(1.5), vec![2.0; ibeo.beams]);
+//! let robot = Pose2::new(1.0, 2.0, 0.0);
+//! let first = scan.returns().next().expect("a return");
+//! let in_world = robot.transform_point(&first.point());
+//! assert!((in_world - robot.position()).norm() - 2.0 < 1e-12);
+//! ```
+#![warn(missing_docs)]
+
+mod laser;
+mod pose;
+mod scan;
+mod stamp;
+
+pub use laser::{BeamWidth, LaserSpec};
+pub use pose::{Pose2, Twist2, wrap_angle};
+pub use scan::{Beam, Scan};
+pub use stamp::{ParseStampError, Stamp};
+
+/// Re-export of the linear-algebra crate the public API uses.
+pub use nalgebra;
