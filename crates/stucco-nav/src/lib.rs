@@ -1,1 +1,56 @@
-//! nav
+//! The navigation core of stucco: walls and door openings found in laser
+//! range scans with the Range Weighted Hough Transform (RWHT) of Forsberg,
+//! Larsson and Wernersson.
+//!
+//! - [`ScanPoints`]: a scan's returns as points, optionally corrected for the
+//!   sensor's motion during the sweep.
+//! - [`HoughTransform`]: the g-weighted transform `C(d, γ)` with the three
+//!   weightings of the paper ([`Weighting`]).
+//! - [`WallExtractor`]: the extractor interface; [`RwhtExtractor`] finds
+//!   peaks one by one and refines each by robust least squares,
+//!   [`RansacExtractor`] is the baseline of the sensor-precision paper.
+//! - [`RoomSearch`]: the four walls of a rectangular room as one group of
+//!   peaks 90° apart, and the room's orientation.
+//! - [`find_doors`]: open doors as runs of beams beyond a wall.
+//! - [`synthetic`]: exact ray-cast scans of rooms with clutter, for tests.
+//!
+//! ```
+//! use rand::SeedableRng;
+//! use stucco_core::{LaserSpec, Pose2, Stamp, Twist2};
+//! use stucco_nav::{synthetic, RwhtConfig, RwhtExtractor, ScanPoints, WallExtractor};
+//!
+//! let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+//! let robot = Pose2::new(2.0, 2.5, 0.4);
+//! let room = synthetic::reference_room(robot.position(), 12, &mut rng);
+//! let laser = synthetic::SyntheticLaser::new(LaserSpec::ibeo_ladar_2d());
+//! let scan = laser.scan(&room.world, &robot, &Twist2::default(), Stamp::ZERO, &mut rng);
+//!
+//! let mut rwht = RwhtExtractor::new(RwhtConfig::default()).expect("valid settings");
+//! let walls = rwht.extract(&ScanPoints::from_scan(&scan));
+//! let (d, _) = room.wall_in_sensor_frame(0, &robot); // the wall x = 0
+//! assert!(walls.iter().any(|w| (w.d_m - d).abs() < 0.02));
+//! ```
+#![warn(missing_docs)]
+
+mod door;
+mod error;
+mod extractor;
+mod hough;
+mod line_fit;
+mod points;
+mod ransac;
+mod room;
+mod rwht;
+pub mod synthetic;
+mod wall;
+
+pub use door::{DoorConfig, DoorOpening, find_doors};
+pub use error::NavError;
+pub use extractor::WallExtractor;
+pub use hough::{HoughConfig, HoughTransform, Weighting};
+pub use line_fit::FitConfig;
+pub use points::{ScanPoint, ScanPoints};
+pub use ransac::{RansacConfig, RansacExtractor};
+pub use room::{RectangularRoom, RoomConfig, RoomSearch};
+pub use rwht::{RwhtConfig, RwhtExtractor};
+pub use wall::Wall;

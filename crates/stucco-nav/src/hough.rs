@@ -1,0 +1,339 @@
+//! The g-weighted Hough transform of a range scan (Forsberg, Larsson and
+//! Wernersson, paper A §2.1):
+//!
+//! ```text
+//! C(d, γ) = Σᵢ w(rᵢ cos(φᵢ − γ) − d) · g(rᵢ, φᵢ, γ)
+//! ```
+//!
+//! with `w` the rectangular window of width `2a` on the point-to-line
+//! distance and three weightings: `g = 1` counts (C1), `g = r cos(φ − γ)`
+//! compensates the surface sampling rate (C2), and `g = r` is the
+//! range-weighted Hough transform, RWHT (C3).
+//!
+//! Each cell is a gate, as paper B reads it: a measurement votes for cell
+//! `(d_j, γ_k)` when some line inside the cell — any angle within half a bin
+//! of `γ_k`, any distance within half a bin of `d_j` — passes within `a` of
+//! it. A wall near the sensor then puts all its measurements in the one cell
+//! that holds it, whatever its angle within the bin; with point-sampled
+//! angles a 3° grid splits a long near wall between two cells and a line
+//! slanted across a radiator and its wall can win. Votes are laid down as
+//! differences and summed once per row, so a vote costs two writes whatever
+//! its span. Only lines facing the sensor (`d > 0`) are voted for.
+
+use crate::NavError;
+use crate::points::ScanPoint;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::{PI, TAU};
+use stucco_core::wrap_angle;
+
+/// The weighting `g` of the transform.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Weighting {
+    /// C1: every measurement counts one; the transform is a histogram.
+    Count,
+    /// C2: weighted by the surface sampling rate, `r cos(φ − γ)`.
+    SurfaceSampling,
+    /// C3, the RWHT: weighted by range, `r`.
+    Range,
+}
+
+/// Resolution, window and weighting of the transform.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HoughConfig {
+    /// Number of angle bins over the full circle (paper: 120, i.e. 3°).
+    pub angle_bins: usize,
+    /// Distance resolution, m (paper: 2.5 cm).
+    pub distance_resolution_m: f64,
+    /// Half-width `a` of the rectangular window, m.
+    pub half_window_m: f64,
+    /// The weighting `g`.
+    pub weighting: Weighting,
+    /// Measurements farther than this are ignored, m (the paper leans on
+    /// its laser's 30 m limit to bound the influence of far spurious echoes).
+    pub max_range_m: f64,
+}
+
+impl Default for HoughConfig {
+    fn default() -> Self {
+        HoughConfig {
+            angle_bins: 120,
+            distance_resolution_m: 0.025,
+            half_window_m: 0.04,
+            weighting: Weighting::Range,
+            max_range_m: 32.0,
+        }
+    }
+}
+
+impl HoughConfig {
+    /// Checks that the settings describe a usable transform.
+    pub fn validate(&self) -> Result<(), NavError> {
+        let bad = |field: &'static str, reason: &str| {
+            Err(NavError::InvalidConfig {
+                field,
+                reason: reason.to_owned(),
+            })
+        };
+        if self.angle_bins < 8 || !self.angle_bins.is_multiple_of(4) {
+            return bad("angle_bins", "must be a multiple of 4, at least 8");
+        }
+        if self.distance_resolution_m.is_nan() || self.distance_resolution_m <= 0.0 {
+            return bad("distance_resolution_m", "must be positive");
+        }
+        if self.half_window_m.is_nan() || self.half_window_m < self.distance_resolution_m / 2.0 {
+            return bad(
+                "half_window_m",
+                "must be at least half the distance resolution, so every measurement votes",
+            );
+        }
+        if self.max_range_m.is_nan() || self.max_range_m <= 0.0 {
+            return bad("max_range_m", "must be positive");
+        }
+        Ok(())
+    }
+
+    /// Angle bin width, rad.
+    pub fn angle_resolution_rad(&self) -> f64 {
+        TAU / self.angle_bins as f64
+    }
+}
+
+/// The accumulator `C(d, γ)` over `γ = k·Δγ` and `d = (j + ½)·Δd`.
+#[derive(Clone, Debug)]
+pub struct HoughTransform {
+    config: HoughConfig,
+    cos: Vec<f64>,
+    sin: Vec<f64>,
+    distance_bins: usize,
+    acc: Vec<f32>,
+}
+
+impl HoughTransform {
+    /// An empty transform.
+    pub fn new(config: HoughConfig) -> Result<Self, NavError> {
+        config.validate()?;
+        let step = config.angle_resolution_rad();
+        let (sin, cos) = (0..config.angle_bins)
+            .map(|k| (k as f64 * step).sin_cos())
+            .unzip();
+        Ok(HoughTransform {
+            config,
+            cos,
+            sin,
+            distance_bins: 0,
+            acc: Vec::new(),
+        })
+    }
+
+    /// Its settings.
+    pub fn config(&self) -> &HoughConfig {
+        &self.config
+    }
+
+    /// Number of angle bins.
+    pub fn angle_bins(&self) -> usize {
+        self.config.angle_bins
+    }
+
+    /// Number of distance bins of the last transform.
+    pub fn distance_bins(&self) -> usize {
+        self.distance_bins
+    }
+
+    /// Angle of bin `k`, rad.
+    pub fn gamma(&self, k: usize) -> f64 {
+        k as f64 * self.config.angle_resolution_rad()
+    }
+
+    /// Distance at the centre of bin `j`, m.
+    pub fn distance(&self, j: usize) -> f64 {
+        (j as f64 + 0.5) * self.config.distance_resolution_m
+    }
+
+    /// `C(d_j, γ_k)`.
+    pub fn value(&self, k: usize, j: usize) -> f64 {
+        f64::from(self.acc[k * self.distance_bins + j])
+    }
+
+    /// One row of the accumulator: `C(·, γ_k)`.
+    pub fn row(&self, k: usize) -> &[f32] {
+        &self.acc[k * self.distance_bins..(k + 1) * self.distance_bins]
+    }
+
+    /// True when `p` is used at all (inside the range limit).
+    pub fn uses(&self, p: &ScanPoint) -> bool {
+        p.range_m <= self.config.max_range_m
+    }
+
+    /// Computes the transform of `pts`.
+    pub fn compute(&mut self, pts: &[ScanPoint]) {
+        let cfg = &self.config;
+        let max_r = pts
+            .iter()
+            .filter(|p| p.range_m <= cfg.max_range_m)
+            .fold(0.0f64, |m, p| m.max(p.range_m));
+        self.distance_bins =
+            ((max_r + cfg.half_window_m) / cfg.distance_resolution_m).ceil() as usize + 2;
+        self.acc.clear();
+        self.acc.resize(self.distance_bins * cfg.angle_bins, 0.0);
+        let n = cfg.angle_bins;
+        let step = cfg.angle_resolution_rad();
+        for p in pts {
+            if !self.uses(p) {
+                continue;
+            }
+            // Bins within 90° (and half a bin) of the bearing: the lines this
+            // point can face.
+            let first = ((p.bearing_rad - PI / 2.0) / step - 0.5).ceil() as i64;
+            for m in 0..(n / 2 + 2) as i64 {
+                let k = (first + m).rem_euclid(n as i64) as usize;
+                if let Some((lo, hi, g)) = self.span(p, k) {
+                    let row = &mut self.acc[k * self.distance_bins..(k + 1) * self.distance_bins];
+                    row[lo] += g as f32;
+                    row[hi + 1] -= g as f32;
+                }
+            }
+        }
+        let m = self.distance_bins;
+        for row in self.acc.chunks_exact_mut(m) {
+            let mut run = 0.0f32;
+            for cell in row.iter_mut() {
+                run += *cell;
+                *cell = run;
+            }
+        }
+    }
+
+    /// The distance bins `lo..=hi` of row `k` that `p` votes for, and the
+    /// weight of its vote; `None` when it votes for none.
+    fn span(&self, p: &ScanPoint, k: usize) -> Option<(usize, usize, f64)> {
+        let cfg = &self.config;
+        let half = cfg.angle_resolution_rad() / 2.0;
+        let off = wrap_angle(p.bearing_rad - self.gamma(k));
+        // ρ(γ) = r·cos(φ − γ) over the cell's angles [γ_k − ½Δγ, γ_k + ½Δγ].
+        let (c1, c2) = ((off - half).cos(), (off + half).cos());
+        let rho_max = if off.abs() <= half {
+            p.range_m
+        } else {
+            p.range_m * c1.max(c2)
+        };
+        if rho_max <= 0.0 {
+            return None;
+        }
+        let rho_min = (p.range_m * c1.min(c2)).max(0.0);
+        let inv_res = 1.0 / cfg.distance_resolution_m;
+        // Bin j covers distances [j·Δd, (j+1)·Δd).
+        let lo = ((rho_min - cfg.half_window_m) * inv_res).floor().max(0.0) as usize;
+        let hi = (((rho_max + cfg.half_window_m) * inv_res).floor() as usize)
+            .min(self.distance_bins - 2);
+        if hi < lo {
+            return None;
+        }
+        let g = match cfg.weighting {
+            Weighting::Count => 1.0,
+            Weighting::SurfaceSampling => p.range_m * off.cos().max(0.0),
+            Weighting::Range => p.range_m,
+        };
+        Some((lo, hi, g))
+    }
+
+    /// The contribution of `p` to cell `(k, j)`: what removing it subtracts.
+    pub fn contribution(&self, p: &ScanPoint, k: usize, j: usize) -> f64 {
+        if !self.uses(p) {
+            return 0.0;
+        }
+        match self.span(p, k) {
+            Some((lo, hi, g)) if (lo..=hi).contains(&j) => g,
+            _ => 0.0,
+        }
+    }
+
+    /// True when `p` votes for cell `(k, j)`: some line of the cell passes
+    /// within the window of it.
+    pub fn votes_for(&self, p: &ScanPoint, k: usize, j: usize) -> bool {
+        self.contribution(p, k, j) > 0.0
+    }
+
+    /// `p·n(γ_k)`: the distance of the line through `p` at angle bin `k`.
+    pub fn rho(&self, p: &ScanPoint, k: usize) -> f64 {
+        p.p.x * self.cos[k] + p.p.y * self.sin[k]
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::expect_used)]
+mod tests {
+    use super::*;
+    use nalgebra::Point2;
+
+    fn point(x: f64, y: f64) -> ScanPoint {
+        ScanPoint {
+            p: Point2::new(x, y),
+            range_m: x.hypot(y),
+            bearing_rad: y.atan2(x),
+            beam: 0,
+        }
+    }
+
+    #[test]
+    fn the_three_weightings_differ_as_the_paper_defines() {
+        // Two points on the wall x = 2: one straight ahead, one 45° off.
+        let pts = [point(2.0, 0.0), point(2.0, 2.0)];
+        let cell = |w: Weighting| {
+            let mut t = HoughTransform::new(HoughConfig {
+                weighting: w,
+                half_window_m: 0.0125,
+                ..HoughConfig::default()
+            })
+            .expect("valid");
+            t.compute(&pts);
+            // γ = 0 is bin 0; bin 80 holds d ∈ [2.0, 2.025): both points vote there once.
+            t.value(0, 80)
+        };
+        assert!((cell(Weighting::Count) - 2.0).abs() < 1e-6);
+        assert!((cell(Weighting::Range) - (2.0 + 8f64.sqrt())).abs() < 1e-5);
+        assert!((cell(Weighting::SurfaceSampling) - 4.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn window_spans_the_bins_within_a() {
+        let mut t = HoughTransform::new(HoughConfig {
+            weighting: Weighting::Count,
+            half_window_m: 0.05,
+            ..HoughConfig::default()
+        })
+        .expect("valid");
+        t.compute(&[point(1.0, 0.0)]);
+        let hit: Vec<usize> = (0..t.distance_bins())
+            .filter(|&j| t.value(0, j) > 0.0)
+            .collect();
+        // Lines of bin 0 (γ within ±1.5°) pass the point at ρ ∈ [cos 1.5°, 1];
+        // the window widens that by 5 cm: bins [0.9497/0.025] = 37 … [1.05/0.025] = 42.
+        assert_eq!(hit, (37..=42).collect::<Vec<_>>());
+        for &j in &hit {
+            assert_eq!(t.contribution(&point(1.0, 0.0), 0, j), 1.0);
+        }
+        // Lines facing away from the point get no vote.
+        assert_eq!(
+            (0..t.distance_bins()).map(|j| t.value(60, j)).sum::<f64>(),
+            0.0
+        );
+    }
+
+    #[test]
+    fn rejects_unusable_settings() {
+        let err = HoughTransform::new(HoughConfig {
+            angle_bins: 10,
+            ..HoughConfig::default()
+        });
+        assert!(matches!(
+            err,
+            Err(NavError::InvalidConfig {
+                field: "angle_bins",
+                ..
+            })
+        ));
+    }
+}

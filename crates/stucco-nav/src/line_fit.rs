@@ -1,0 +1,303 @@
+//! Robust least-squares refinement of a line hypothesis: the step that turns
+//! a Hough peak (or a RANSAC hypothesis) into a wall with a covariance.
+//!
+//! The Hough cell only gates the measurements (the papers' "cluster gate");
+//! the resolution comes from the fit. Iteratively reweighted total least
+//! squares with Tukey's biweight rejects the clutter inside the gate — a
+//! radiator 10 cm in front of its wall, a person's legs — and the seen part
+//! is split at gaps, so collinear but separate walls are not merged.
+
+use crate::points::ScanPoint;
+use crate::wall::Wall;
+use nalgebra::{Matrix2, Point2, Vector2};
+use serde::{Deserialize, Serialize};
+use stucco_core::wrap_angle;
+
+/// Settings of the robust line fit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FitConfig {
+    /// Scale of the perpendicular noise, m (the sensor's range σ).
+    pub noise_sigma_m: f64,
+    /// Tukey biweight cut-off in units of `noise_sigma_m`.
+    pub tukey_c: f64,
+    /// Largest number of reweighting iterations.
+    pub max_iterations: usize,
+    /// Fewest measurements a wall may rest on.
+    pub min_points: usize,
+    /// Shortest seen length a wall may have, m.
+    pub min_length_m: f64,
+    /// A gap longer than this along the line splits it into separate walls, m
+    /// (longer than the widest door, so a door does not split its wall).
+    pub max_gap_m: f64,
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        FitConfig {
+            noise_sigma_m: 0.02,
+            tukey_c: 4.0,
+            max_iterations: 12,
+            min_points: 8,
+            min_length_m: 0.4,
+            max_gap_m: 1.5,
+        }
+    }
+}
+
+/// A fitted wall and the measurements it took.
+#[derive(Clone, Debug)]
+pub(crate) struct LineFit {
+    pub wall: Wall,
+    /// Indices of every measurement the fit claimed (within the Tukey
+    /// cut-off, in the kept run): what an extractor removes before the next.
+    pub support: Vec<usize>,
+}
+
+/// Reusable buffers of the fitter.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LineFitter {
+    pub config: FitConfig,
+    candidates: Vec<usize>,
+    weights: Vec<f64>,
+    along: Vec<(f64, usize)>,
+}
+
+/// A line in normal form, `n(γ)·p = d`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Line {
+    pub d: f64,
+    pub gamma: f64,
+}
+
+impl Line {
+    fn normal(&self) -> Vector2<f64> {
+        let (s, c) = self.gamma.sin_cos();
+        Vector2::new(c, s)
+    }
+    fn residual(&self, p: &Point2<f64>) -> f64 {
+        self.normal().dot(&p.coords) - self.d
+    }
+}
+
+impl LineFitter {
+    pub fn new(config: FitConfig) -> Self {
+        LineFitter {
+            config,
+            ..Default::default()
+        }
+    }
+
+    /// Refines a line hypothesis on the points not yet `taken`: a first
+    /// total-least-squares fit on the points `in_seed` accepts (a Hough
+    /// cell's voters, a RANSAC hypothesis' supporters), then Tukey
+    /// reweighting around it.
+    pub fn fit(
+        &mut self,
+        pts: &[ScanPoint],
+        taken: &[bool],
+        in_seed: impl Fn(&ScanPoint) -> bool,
+    ) -> Option<LineFit> {
+        let cfg = self.config.clone();
+        let cut = cfg.tukey_c * cfg.noise_sigma_m;
+        self.candidates.clear();
+        self.candidates
+            .extend((0..pts.len()).filter(|&i| !taken[i] && in_seed(&pts[i])));
+        if self.candidates.len() < cfg.min_points {
+            return None;
+        }
+        self.weights.clear();
+        self.weights.resize(self.candidates.len(), 1.0);
+        let widest = cut;
+        let mut line = weighted_tls(pts, &self.candidates, &self.weights)?;
+        // Reweighting with a cut-off that shrinks from the gate to the noise
+        // scale; after convergence keep the heaviest gap-free run and refit on it.
+        let mut chained = false;
+        let mut scale = widest;
+        for _ in 0..cfg.max_iterations {
+            scale = (scale * 0.6).max(cut);
+            self.select(pts, taken, line, scale, chained);
+            if self.candidates.len() < cfg.min_points {
+                return None;
+            }
+            let next = weighted_tls(pts, &self.candidates, &self.weights)?;
+            let moved = (next.d - line.d).abs() + (wrap_angle(next.gamma - line.gamma)).abs() * 5.0;
+            line = next;
+            if moved < 1e-5 && scale <= cut {
+                if chained {
+                    break;
+                }
+                if !self.keep_longest_run(pts, line) {
+                    break;
+                }
+                chained = true;
+            }
+        }
+        if !chained {
+            self.select(pts, taken, line, cut, false);
+            self.keep_longest_run(pts, line);
+        }
+        self.finish(pts, line)
+    }
+
+    /// Candidates within `cut` of `line`, with their Tukey weights. With
+    /// `within_run`, only the current candidates are reconsidered.
+    fn select(
+        &mut self,
+        pts: &[ScanPoint],
+        taken: &[bool],
+        line: Line,
+        cut: f64,
+        within_run: bool,
+    ) {
+        if !within_run {
+            self.candidates.clear();
+            self.candidates.extend(
+                (0..pts.len()).filter(|&i| !taken[i] && line.residual(&pts[i].p).abs() < cut),
+            );
+        } else {
+            self.candidates
+                .retain(|&i| line.residual(&pts[i].p).abs() < cut);
+        }
+        self.weights.clear();
+        self.weights.extend(self.candidates.iter().map(|&i| {
+            let u = line.residual(&pts[i].p) / cut;
+            let t = 1.0 - u * u;
+            t * t
+        }));
+    }
+
+    /// Keeps the candidates of the heaviest run without gaps longer than
+    /// `max_gap_m` along the line. Returns whether anything was dropped.
+    fn keep_longest_run(&mut self, pts: &[ScanPoint], line: Line) -> bool {
+        let u = line.normal();
+        let dir = Vector2::new(-u.y, u.x);
+        self.along.clear();
+        self.along.extend(
+            self.candidates
+                .iter()
+                .enumerate()
+                .map(|(k, &i)| (dir.dot(&pts[i].p.coords), k)),
+        );
+        self.along.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (mut best, mut best_w) = ((0, 0), -1.0);
+        let mut start = 0;
+        let mut w = 0.0;
+        for j in 0..self.along.len() {
+            if j > start && self.along[j].0 - self.along[j - 1].0 > self.config.max_gap_m {
+                start = j;
+                w = 0.0;
+            }
+            w += self.weights[self.along[j].1];
+            if w > best_w {
+                best_w = w;
+                best = (start, j + 1);
+            }
+        }
+        if best.1 - best.0 == self.along.len() {
+            return false;
+        }
+        let keep: Vec<usize> = self.along[best.0..best.1].iter().map(|&(_, k)| k).collect();
+        let mut keep_sorted = keep;
+        keep_sorted.sort_unstable();
+        self.candidates = keep_sorted.iter().map(|&k| self.candidates[k]).collect();
+        self.weights = keep_sorted.iter().map(|&k| self.weights[k]).collect();
+        true
+    }
+
+    /// The wall of the final fit: covariance from the residuals, extent from
+    /// the outermost inliers.
+    fn finish(&mut self, pts: &[ScanPoint], line: Line) -> Option<LineFit> {
+        let cfg = &self.config;
+        let inlier_cut = 3.0 * cfg.noise_sigma_m;
+        let n_vec = line.normal();
+        let dir = Vector2::new(-n_vec.y, n_vec.x);
+        let inliers: Vec<usize> = self
+            .candidates
+            .iter()
+            .copied()
+            .filter(|&i| line.residual(&pts[i].p).abs() <= inlier_cut)
+            .collect();
+        let n = inliers.len();
+        if n < cfg.min_points.max(3) {
+            return None;
+        }
+        let mut t_min = f64::INFINITY;
+        let mut t_max = f64::NEG_INFINITY;
+        let (mut sum_t, mut sum_r2) = (0.0, 0.0);
+        for &i in &inliers {
+            let t = dir.dot(&pts[i].p.coords);
+            t_min = t_min.min(t);
+            t_max = t_max.max(t);
+            sum_t += t;
+            let r = line.residual(&pts[i].p);
+            sum_r2 += r * r;
+        }
+        if t_max - t_min < cfg.min_length_m {
+            return None;
+        }
+        let t_mean = sum_t / n as f64;
+        let spread: f64 = inliers
+            .iter()
+            .map(|&i| (dir.dot(&pts[i].p.coords) - t_mean).powi(2))
+            .sum();
+        let sigma2 = (sum_r2 / (n as f64 - 2.0)).max(1e-10);
+        // Offset at the centroid and rotation about it are independent;
+        // d at the origin moves by t̄ per radian of rotation.
+        let var_gamma = sigma2 / spread.max(1e-12);
+        let var_offset = sigma2 / n as f64;
+        let covariance = Matrix2::new(
+            var_offset + t_mean * t_mean * var_gamma,
+            t_mean * var_gamma,
+            t_mean * var_gamma,
+            var_gamma,
+        );
+        let foot = |t: f64| Point2::from(n_vec * line.d + dir * t);
+        Some(LineFit {
+            wall: Wall {
+                d_m: line.d,
+                gamma_rad: line.gamma,
+                covariance,
+                points: n,
+                rms_residual_m: (sum_r2 / n as f64).sqrt(),
+                ends: [foot(t_min), foot(t_max)],
+            },
+            support: self.candidates.clone(),
+        })
+    }
+}
+
+/// Weighted total least squares line through `pts[idx]`, with `d ≥ 0`.
+pub(crate) fn weighted_tls(pts: &[ScanPoint], idx: &[usize], w: &[f64]) -> Option<Line> {
+    let mut sw = 0.0;
+    let mut c = Vector2::zeros();
+    for (k, &i) in idx.iter().enumerate() {
+        sw += w[k];
+        c += pts[i].p.coords * w[k];
+    }
+    if sw <= 0.0 {
+        return None;
+    }
+    c /= sw;
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for (k, &i) in idx.iter().enumerate() {
+        let q = pts[i].p.coords - c;
+        sxx += w[k] * q.x * q.x;
+        syy += w[k] * q.y * q.y;
+        sxy += w[k] * q.x * q.y;
+    }
+    // The normal is the direction of least scatter: angle of the principal
+    // axis plus 90°.
+    let axis = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let mut gamma = axis + std::f64::consts::FRAC_PI_2;
+    let (s, co) = gamma.sin_cos();
+    let mut d = co * c.x + s * c.y;
+    if d < 0.0 {
+        d = -d;
+        gamma += std::f64::consts::PI;
+    }
+    Some(Line {
+        d,
+        gamma: wrap_angle(gamma),
+    })
+}

@@ -1,0 +1,96 @@
+//! A scan's returns as points in the sensor frame, optionally corrected for
+//! the sensor's motion during the sweep.
+
+use nalgebra::Point2;
+use stucco_core::{Scan, Twist2};
+
+/// One echo of a scan, as a point in the sensor frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanPoint {
+    /// Position in the sensor frame at the scan's stamp, m.
+    pub p: Point2<f64>,
+    /// Range as measured, m: the weight of the range-weighted transform.
+    pub range_m: f64,
+    /// Bearing of `p` in the sensor frame, rad.
+    pub bearing_rad: f64,
+    /// Index of the beam in its scan.
+    pub beam: usize,
+}
+
+/// The echoes of one scan as points, ready for line extraction.
+///
+/// Buffers are reused: refill with [`ScanPoints::fill`] or
+/// [`ScanPoints::fill_deskewed`] to extract scan after scan without
+/// allocating.
+#[derive(Clone, Debug, Default)]
+pub struct ScanPoints {
+    points: Vec<ScanPoint>,
+    angle_increment_rad: f64,
+}
+
+impl ScanPoints {
+    /// The returns of `scan`, as measured.
+    pub fn from_scan(scan: &Scan) -> Self {
+        let mut pts = ScanPoints::default();
+        pts.fill(scan);
+        pts
+    }
+
+    /// The returns of `scan`, corrected for a sensor moving with constant
+    /// body-frame velocity `twist` during the sweep: every point is expressed
+    /// in the sensor's frame at the scan's stamp (its first beam).
+    pub fn from_scan_deskewed(scan: &Scan, twist: &Twist2) -> Self {
+        let mut pts = ScanPoints::default();
+        pts.fill_deskewed(scan, twist);
+        pts
+    }
+
+    /// Refills from `scan`, as measured.
+    pub fn fill(&mut self, scan: &Scan) {
+        self.points.clear();
+        self.angle_increment_rad = scan.angle_increment_rad.abs();
+        self.points.extend(scan.returns().map(|b| ScanPoint {
+            p: b.point(),
+            range_m: b.range_m,
+            bearing_rad: b.angle_rad,
+            beam: b.index,
+        }));
+    }
+
+    /// Refills from `scan`, undoing the distortion of constant-velocity
+    /// motion during the sweep (see [`ScanPoints::from_scan_deskewed`]).
+    pub fn fill_deskewed(&mut self, scan: &Scan, twist: &Twist2) {
+        self.points.clear();
+        self.angle_increment_rad = scan.angle_increment_rad.abs();
+        self.points.extend(scan.returns().map(|b| {
+            let at_beam = twist.displacement(scan.beam_time_s(b.index));
+            let p = at_beam.transform_point(&b.point());
+            ScanPoint {
+                p,
+                range_m: b.range_m,
+                bearing_rad: p.y.atan2(p.x),
+                beam: b.index,
+            }
+        }));
+    }
+
+    /// The points, in sweep order.
+    pub fn points(&self) -> &[ScanPoint] {
+        &self.points
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True when the scan had no returns.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Angular step of the scan the points came from, rad.
+    pub fn angle_increment_rad(&self) -> f64 {
+        self.angle_increment_rad
+    }
+}
