@@ -1,1 +1,4 @@
+//! Acceptance tests: whole jobs on real data, asserted on what a user sees.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod walls_on_real_logs;

@@ -2,7 +2,7 @@
 //! the sensor's motion during the sweep.
 
 use nalgebra::Point2;
-use stucco_core::{Scan, Twist2};
+use stucco_core::{Pose2, Scan, Twist2};
 
 /// One echo of a scan, as a point in the sensor frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,6 +72,27 @@ impl ScanPoints {
                 beam: b.index,
             }
         }));
+    }
+
+    /// The same points seen from a sensor moved by `pose`'s inverse: every
+    /// point `p` becomes `pose · p`, with its range and bearing recomputed.
+    pub fn transformed(&self, pose: &Pose2) -> ScanPoints {
+        ScanPoints {
+            points: self
+                .points
+                .iter()
+                .map(|q| {
+                    let p = pose.transform_point(&q.p);
+                    ScanPoint {
+                        p,
+                        range_m: p.coords.norm(),
+                        bearing_rad: p.y.atan2(p.x),
+                        beam: q.beam,
+                    }
+                })
+                .collect(),
+            angle_increment_rad: self.angle_increment_rad,
+        }
     }
 
     /// The points, in sweep order.

@@ -1,0 +1,136 @@
+//! Time to extract walls from one scan of the cluttered reference room: the RWHT extractor, the RANSAC baseline and the rectangular-room search, on 450-beam (IBEO LADAR 2D) and 1081-beam (Hokuyo UTM-30) scans, plus the Hough transform alone; run with `cargo bench -p stucco-nav --bench extract -- --noplot`.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::hint::black_box;
+use std::time::Duration;
+use stucco_core::{LaserSpec, Pose2, Stamp, Twist2};
+use stucco_nav::{
+    FitConfig, HoughConfig, HoughTransform, RansacConfig, RansacExtractor, RoomConfig, RoomSearch,
+    RwhtConfig, RwhtExtractor, ScanPoints, WallExtractor, Weighting, synthetic,
+};
+
+/// Robot poses (and rooms) per scan set.
+const POSES: usize = 16;
+/// People walking about the reference room.
+const PEOPLE: usize = 12;
+/// Size of the reference room, m.
+const ROOM_M: (f64, f64) = (5.45, 5.64);
+
+/// The same `POSES` poses for every sensor: the scan sets differ only in
+/// the laser.
+fn poses() -> Vec<Pose2> {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x57_0cc0);
+    (0..POSES)
+        .map(|_| synthetic::random_pose(ROOM_M, 0.5, &mut rng))
+        .collect()
+}
+
+/// One scan of the reference room from each pose; room `i` (its clutter
+/// and people) is the same for every sensor.
+fn scans(spec: &LaserSpec) -> Vec<ScanPoints> {
+    let laser = synthetic::SyntheticLaser::new(spec.clone());
+    poses()
+        .iter()
+        .enumerate()
+        .map(|(i, robot)| {
+            let mut rng = ChaCha8Rng::seed_from_u64(1000 + i as u64);
+            let room = synthetic::reference_room(robot.position(), PEOPLE, &mut rng);
+            let scan = laser.scan(
+                &room.world,
+                robot,
+                &Twist2::default(),
+                Stamp::ZERO,
+                &mut rng,
+            );
+            ScanPoints::from_scan(&scan)
+        })
+        .collect()
+}
+
+/// The scans in turn, one per call, round and round.
+fn cycle<'a>(scans: &'a [ScanPoints]) -> impl FnMut() -> &'a ScanPoints {
+    let mut i = 0;
+    move || {
+        let s = &scans[i % scans.len()];
+        i += 1;
+        s
+    }
+}
+
+fn extract(c: &mut Criterion) {
+    for (group, spec) in [
+        ("extract/ibeo-450", LaserSpec::ibeo_ladar_2d()),
+        ("extract/utm30-1081", LaserSpec::hokuyo_utm30()),
+    ] {
+        let scans = scans(&spec);
+        assert!(scans.iter().all(|s| !s.is_empty()), "{group}: empty scan");
+        let fit = FitConfig {
+            noise_sigma_m: spec.range_sigma_m,
+            ..FitConfig::default()
+        };
+        let mut g = c.benchmark_group(group);
+
+        let mut rwht = RwhtExtractor::new(RwhtConfig {
+            fit: fit.clone(),
+            ..RwhtConfig::default()
+        })
+        .expect("valid RWHT settings");
+        let mut next = cycle(&scans);
+        g.bench_function("rwht", |b| {
+            b.iter(|| black_box(rwht.extract(black_box(next()))));
+        });
+
+        let mut ransac = RansacExtractor::new(RansacConfig {
+            fit: fit.clone(),
+            ..RansacConfig::default()
+        })
+        .expect("valid RANSAC settings");
+        let mut next = cycle(&scans);
+        g.bench_function("ransac", |b| {
+            b.iter(|| black_box(ransac.extract(black_box(next()))));
+        });
+
+        let mut room = RoomSearch::new(RoomConfig {
+            fit,
+            ..RoomConfig::default()
+        })
+        .expect("valid room settings");
+        let mut next = cycle(&scans);
+        g.bench_function("room", |b| {
+            b.iter(|| black_box(room.find(black_box(next()))));
+        });
+
+        g.finish();
+    }
+}
+
+fn hough(c: &mut Criterion) {
+    let scans = scans(&LaserSpec::ibeo_ladar_2d());
+    let mut transform = HoughTransform::new(HoughConfig {
+        weighting: Weighting::Range,
+        ..HoughConfig::default()
+    })
+    .expect("valid Hough settings");
+    let mut next = cycle(&scans);
+    let mut g = c.benchmark_group("hough");
+    g.bench_function("ibeo-450", |b| {
+        b.iter(|| {
+            transform.compute(black_box(next().points()));
+            black_box(transform.value(0, 0))
+        });
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+        .sample_size(30);
+    targets = extract, hough
+}
+criterion_main!(benches);

@@ -1,0 +1,260 @@
+//! Wall extraction on synthetic scans: invariance to rigid motion, clutter
+//! away from the walls, motion distortion, and the reference room of
+//! ACCEPTANCE.md (the full 10,000-pose study is `#[ignore]`d; run it with
+//! `cargo test --release -p stucco-nav --test extraction -- --ignored`).
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use proptest::prelude::*;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use stucco_core::{LaserSpec, Pose2, Stamp, Twist2, wrap_angle};
+use stucco_nav::synthetic::{self, Clutter, SyntheticLaser};
+use stucco_nav::*;
+
+fn empty_room(rng: &mut ChaCha8Rng) -> synthetic::RoomScene {
+    let bare = Clutter {
+        people: 0,
+        tables: 0,
+        chairs: 0,
+        radiator_fraction: 0.0,
+        ..Clutter::default()
+    };
+    synthetic::rectangular_room(5.45, 5.64, &[(2, 2.1, 0.9, true)], Some(3.0), &bare, rng)
+}
+
+/// The wall of `walls` matching `(d, γ)` within 5 cm and 2°.
+fn matching(walls: &[Wall], d: f64, g: f64) -> Option<&Wall> {
+    walls
+        .iter()
+        .find(|w| (w.d_m - d).abs() < 0.05 && wrap_angle(w.gamma_rad - g).abs() < 0.035)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Moving every point rigidly moves every wall the same way.
+    #[test]
+    fn rigid_motion_moves_walls_alike(seed in 0u64..1000, dx in -0.5..0.5f64, dy in -0.5..0.5f64, dth in -3.1..3.1f64) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let scene = empty_room(&mut rng);
+        let pose = synthetic::random_pose(scene.size_m, 1.0, &mut rng);
+        let scan = SyntheticLaser::new(LaserSpec::ibeo_ladar_2d()).scan(&scene.world, &pose, &Twist2::default(), Stamp::ZERO, &mut rng);
+        let pts = ScanPoints::from_scan(&scan);
+        let motion = Pose2::new(dx, dy, dth);
+        let mut rwht = RwhtExtractor::new(RwhtConfig::default()).unwrap();
+        let before = rwht.extract(&pts);
+        let after = rwht.extract(&pts.transformed(&motion));
+        let mut compared = 0;
+        // Well-supported walls; marginal ones near the detection threshold may
+        // come and go as the window slides over them.
+        for w in before.iter().filter(|w| w.length_m() > 1.0 && w.points >= 60) {
+            let moved = w.transformed(&motion);
+            let m = matching(&after, moved.d_m, moved.gamma_rad);
+            prop_assert!(m.is_some(), "wall {w:?} moved to {moved:?} not found in {after:?}");
+            let m = m.unwrap();
+            let tol_d = 3.0 * moved.sigma_d_m().max(m.sigma_d_m()) + 1e-3;
+            let tol_g = 3.0 * moved.sigma_gamma_rad().max(m.sigma_gamma_rad()) + 1e-4;
+            prop_assert!((m.d_m - moved.d_m).abs() < tol_d, "d {} vs {}", m.d_m, moved.d_m);
+            prop_assert!(wrap_angle(m.gamma_rad - moved.gamma_rad).abs() < tol_g);
+            compared += 1;
+        }
+        prop_assert!(compared >= 2, "only {compared} walls compared");
+    }
+}
+
+/// People and furniture away from the walls change only the beams they
+/// block: the walls stay put within their own uncertainty.
+#[test]
+fn clutter_away_from_walls_leaves_walls_unchanged() {
+    let laser = SyntheticLaser::new(LaserSpec::ibeo_ladar_2d());
+    let mut rwht = RwhtExtractor::new(RwhtConfig::default()).unwrap();
+    let (mut total_seen, mut total_kept) = (0, 0);
+    for seed in 0..20 {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let scene = empty_room(&mut rng);
+        let pose = synthetic::random_pose(scene.size_m, 1.0, &mut rng);
+        let mut cluttered = scene.clone();
+        // Table legs and people at least 1 m from every wall and 0.6 m from the robot.
+        let mut placed = 0;
+        while placed < 10 {
+            let p = synthetic::random_pose(scene.size_m, 1.0, &mut rng).position();
+            if (p - pose.position()).norm() > 0.6 {
+                cluttered.world.circles.push(synthetic::Circle {
+                    center: p,
+                    radius: if placed % 2 == 0 { 0.2 } else { 0.03 },
+                    velocity: nalgebra::Vector2::zeros(),
+                });
+                placed += 1;
+            }
+        }
+        // The same noise draws for both scans: every beam returns in this closed room.
+        let clean = laser.scan(
+            &scene.world,
+            &pose,
+            &Twist2::default(),
+            Stamp::ZERO,
+            &mut ChaCha8Rng::seed_from_u64(seed + 100),
+        );
+        let busy = laser.scan(
+            &cluttered.world,
+            &pose,
+            &Twist2::default(),
+            Stamp::ZERO,
+            &mut ChaCha8Rng::seed_from_u64(seed + 100),
+        );
+        let a = rwht.extract(&ScanPoints::from_scan(&clean));
+        let b = rwht.extract(&ScanPoints::from_scan(&busy));
+        let mut kept = 0;
+        let mut seen = 0;
+        for w in 0..4 {
+            let (d, g) = scene.wall_in_sensor_frame(w, &pose);
+            seen += usize::from(matching(&a, d, g).is_some());
+            let (x, y) = match (matching(&a, d, g), matching(&b, d, g)) {
+                (Some(x), Some(y)) => (x, y),
+                // Behind the sensor, in its blind sector: seen in neither.
+                // Hidden behind the clutter, or in the blind sector.
+                _ => continue,
+            };
+            kept += 1;
+            assert!(
+                (x.d_m - y.d_m).abs() < 3.0 * x.sigma_d_m().max(y.sigma_d_m()) + 1e-3,
+                "seed {seed} wall {w}: {x:?} vs {y:?}"
+            );
+            assert!(
+                wrap_angle(x.gamma_rad - y.gamma_rad).abs()
+                    < 3.0 * x.sigma_gamma_rad().max(y.sigma_gamma_rad()) + 1e-4
+            );
+        }
+        total_seen += seen;
+        total_kept += kept;
+    }
+    assert!(
+        total_kept * 10 >= total_seen * 8,
+        "clutter hid {} of {total_seen} walls",
+        total_seen - total_kept
+    );
+}
+
+/// A scan taken at 0.8 m/s while turning is bent; correcting it under
+/// constant velocity brings the walls back to where they are at the stamp.
+#[test]
+fn deskewing_undoes_motion_distortion() {
+    let laser = SyntheticLaser::new(LaserSpec::ibeo_ladar_2d());
+    let twist = Twist2::new(0.8, 0.0, 0.6);
+    let mut rwht = RwhtExtractor::new(RwhtConfig::default()).unwrap();
+    let (mut raw_err, mut fixed_err, mut compared) = (0.0, 0.0, 0);
+    for seed in 0..20 {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let scene = empty_room(&mut rng);
+        let pose = synthetic::random_pose(scene.size_m, 1.0, &mut rng);
+        let scan = laser.scan(&scene.world, &pose, &twist, Stamp::ZERO, &mut rng);
+        let raw = rwht.extract(&ScanPoints::from_scan(&scan));
+        let fixed = rwht.extract(&ScanPoints::from_scan_deskewed(&scan, &twist));
+        for w in 0..4 {
+            let (d, g) = scene.wall_in_sensor_frame(w, &pose);
+            let err = |walls: &[Wall]| {
+                walls
+                    .iter()
+                    .filter(|m| wrap_angle(m.gamma_rad - g).abs() < 0.1 && (m.d_m - d).abs() < 0.2)
+                    .map(|m| (m.d_m - d).abs() + wrap_angle(m.gamma_rad - g).abs())
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let f = err(&fixed);
+            if f.is_infinite() {
+                continue; // in the blind sector
+            }
+            let m = fixed
+                .iter()
+                .filter(|m| wrap_angle(m.gamma_rad - g).abs() < 0.1 && (m.d_m - d).abs() < 0.2)
+                .min_by(|a, b| (a.d_m - d).abs().total_cmp(&(b.d_m - d).abs()))
+                .expect("a match");
+            assert!(
+                (m.d_m - d).abs() < 3.0 * m.sigma_d_m() + 2e-3
+                    && wrap_angle(m.gamma_rad - g).abs() < 3.0 * m.sigma_gamma_rad() + 1e-4,
+                "seed {seed} wall {w}: deskewed {m:?}, truth ({d}, {g})"
+            );
+            fixed_err += f;
+            raw_err += err(&raw).min(0.3);
+            compared += 1;
+        }
+    }
+    assert!(compared >= 50, "only {compared} walls seen");
+    assert!(
+        fixed_err * 3.0 < raw_err,
+        "deskewed {fixed_err} vs raw {raw_err}"
+    );
+}
+
+struct RoomStudy {
+    poses: usize,
+    all_four: usize,
+    err_d: Vec<f64>,
+    err_g: Vec<f64>,
+}
+
+fn reference_room_study(poses: usize, people: usize, seed: u64) -> RoomStudy {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let laser = SyntheticLaser::new(LaserSpec::ibeo_ladar_2d());
+    let mut search = RoomSearch::new(RoomConfig::default()).unwrap();
+    let mut study = RoomStudy {
+        poses,
+        all_four: 0,
+        err_d: vec![],
+        err_g: vec![],
+    };
+    for _ in 0..poses {
+        let pose = synthetic::random_pose((5.45, 5.64), 0.5, &mut rng);
+        let scene = synthetic::reference_room(pose.position(), people, &mut rng);
+        let scan = laser.scan(
+            &scene.world,
+            &pose,
+            &Twist2::default(),
+            Stamp::ZERO,
+            &mut rng,
+        );
+        let room = search.find(&ScanPoints::from_scan(&scan));
+        let walls: Vec<Wall> = room
+            .map(|r| r.walls.into_iter().flatten().collect())
+            .unwrap_or_default();
+        let mut found = 0;
+        for w in 0..4 {
+            let (d, g) = scene.wall_in_sensor_frame(w, &pose);
+            if let Some(m) = matching(&walls, d, g) {
+                found += 1;
+                study.err_d.push(m.d_m - d);
+                study.err_g.push(wrap_angle(m.gamma_rad - g));
+            }
+        }
+        study.all_four += usize::from(found == 4);
+    }
+    study
+}
+
+fn std_dev(v: &[f64]) -> f64 {
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// ACCEPTANCE.md, navigation core: in the cluttered reference room (IBEO,
+/// a dozen people, radiators, tables), all four walls in ≥ 99.9% of 10,000
+/// random poses ≥ 0.5 m from the walls, σ ≤ 5 mm and ≤ 0.2°.
+#[test]
+#[ignore = "study: 10,000 scans; run with --release -- --ignored"]
+fn reference_room_all_four_walls_in_999_of_10000_poses() {
+    let s = reference_room_study(10_000, 12, 2026);
+    let (sd, sg) = (std_dev(&s.err_d), std_dev(&s.err_g).to_degrees());
+    println!(
+        "all four walls in {}/{} poses; σ_d {:.2} mm, σ_γ {:.3}°",
+        s.all_four,
+        s.poses,
+        sd * 1e3,
+        sg
+    );
+    assert!(
+        s.all_four as f64 >= 0.999 * s.poses as f64,
+        "all four walls in only {}/{}",
+        s.all_four,
+        s.poses
+    );
+    assert!(sd <= 0.005 && sg <= 0.2, "σ_d {sd} m, σ_γ {sg}°");
+}
