@@ -104,8 +104,6 @@ impl HoughConfig {
 #[derive(Clone, Debug)]
 pub struct HoughTransform {
     config: HoughConfig,
-    cos: Vec<f64>,
-    sin: Vec<f64>,
     distance_bins: usize,
     acc: Vec<f32>,
 }
@@ -114,14 +112,8 @@ impl HoughTransform {
     /// An empty transform.
     pub fn new(config: HoughConfig) -> Result<Self, NavError> {
         config.validate()?;
-        let step = config.angle_resolution_rad();
-        let (sin, cos) = (0..config.angle_bins)
-            .map(|k| (k as f64 * step).sin_cos())
-            .unzip();
         Ok(HoughTransform {
             config,
-            cos,
-            sin,
             distance_bins: 0,
             acc: Vec::new(),
         })
@@ -254,11 +246,6 @@ impl HoughTransform {
     /// within the window of it.
     pub fn votes_for(&self, p: &ScanPoint, k: usize, j: usize) -> bool {
         self.contribution(p, k, j) > 0.0
-    }
-
-    /// `p·n(γ_k)`: the distance of the line through `p` at angle bin `k`.
-    pub fn rho(&self, p: &ScanPoint, k: usize) -> f64 {
-        p.p.x * self.cos[k] + p.p.y * self.sin[k]
     }
 }
 

@@ -108,22 +108,19 @@ impl LineFitter {
         }
         self.weights.clear();
         self.weights.resize(self.candidates.len(), 1.0);
-        let widest = cut;
         let mut line = weighted_tls(pts, &self.candidates, &self.weights)?;
-        // Reweighting with a cut-off that shrinks from the gate to the noise
-        // scale; after convergence keep the heaviest gap-free run and refit on it.
+        // Tukey reweighting at the noise scale; after convergence keep the
+        // heaviest gap-free run and refit on it.
         let mut chained = false;
-        let mut scale = widest;
         for _ in 0..cfg.max_iterations {
-            scale = (scale * 0.6).max(cut);
-            self.select(pts, taken, line, scale, chained);
+            self.select(pts, taken, line, cut, chained);
             if self.candidates.len() < cfg.min_points {
                 return None;
             }
             let next = weighted_tls(pts, &self.candidates, &self.weights)?;
             let moved = (next.d - line.d).abs() + (wrap_angle(next.gamma - line.gamma)).abs() * 5.0;
             line = next;
-            if moved < 1e-5 && scale <= cut {
+            if moved < 1e-5 {
                 if chained {
                     break;
                 }
