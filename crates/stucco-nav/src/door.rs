@@ -1,8 +1,22 @@
 //! Door openings: runs of consecutive measurements beyond a wall line (paper
-//! A §2.2). The opening lies between the two door frames, each placed
-//! halfway between the last beam on the wall and the first beyond it; the
-//! angular step and the beam's footprint make each frame's position roughly
-//! the sum of two uniform errors, approximated as Gaussian.
+//! A §2.2).
+//!
+//! Every beam crossing a wall's line is classed by where its echo lies
+//! relative to the line: on the wall, in front of it (clutter), on a jamb
+//! (a little beyond: the wall's thickness, a radiator's wall behind its
+//! front), or through it (far beyond, or no echo). An opening is a run of
+//! jamb and through beams, with at least `min_beams_through` through beams,
+//! between two stretches of wall each at least `min_side_m` long, so a line
+//! through furniture legs or a row of radiators is never taken for a door.
+//!
+//! Each frame lies half a beam step past the last echo on the wall (less
+//! the part of the footprint that may overhang the edge); where the beams
+//! meet the jamb's face instead (the far frame of an opening seen at an
+//! angle), the jamb hits place the frame directly. The angular step and the
+//! footprint make a frame's position roughly the sum of two uniform errors,
+//! approximated as Gaussian. Only well-fitted walls (enough measurements,
+//! residuals no rougher than the range noise allows) are searched, and a
+//! person's rounded front never makes a wall there.
 
 use crate::wall::Wall;
 use nalgebra::{Matrix2, Point2, Vector2};
@@ -27,6 +41,27 @@ pub struct DoorConfig {
     pub max_frame_sigma_m: f64,
     /// Fewest beams that must pass through the opening.
     pub min_beams_through: usize,
+    /// Echoes up to this far behind the wall line are the wall's own depth
+    /// (jambs, what a radiator stands in front of); a beam passes through
+    /// the opening only when its echo lies deeper, m.
+    pub max_jamb_depth_m: f64,
+    /// Length of wall seen on each side of an opening, at least, m.
+    pub min_side_m: f64,
+    /// ... or this much, when the stretch of wall ends in something nearer
+    /// than the wall (the next wall at a corner, an object hiding the rest),
+    /// not in free space as the rounded side of a person does, m.
+    pub min_closed_side_m: f64,
+    /// Walls resting on fewer measurements are not searched for doors.
+    pub min_wall_points: usize,
+    /// Walls whose measurements scatter about the fitted line more than
+    /// this many range sigmas (RMS) are not searched for doors: a line
+    /// through the fronts of people or furniture is rougher than a wall.
+    pub max_wall_rms_sigmas: f64,
+    /// Share of a beam's footprint that must fall on a surface for the echo
+    /// to come from it: a beam grazing a door frame reports the frame while
+    /// its axis is still up to `(½ − share)` of a footprint inside the
+    /// opening, and the frames are placed accordingly.
+    pub mixed_echo_fraction: f64,
 }
 
 impl Default for DoorConfig {
@@ -45,6 +80,12 @@ impl DoorConfig {
             beam_width: laser.beam_width,
             max_frame_sigma_m: 0.08,
             min_beams_through: 2,
+            max_jamb_depth_m: 0.35,
+            min_side_m: 0.4,
+            min_closed_side_m: 0.2,
+            min_wall_points: 20,
+            max_wall_rms_sigmas: 1.35,
+            mixed_echo_fraction: 1.0 / 3.0,
         }
     }
 }
@@ -69,23 +110,46 @@ pub struct DoorOpening {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Hit {
     OnWall,
-    Beyond,
     InFront,
+    /// A little beyond the line: the wall's own depth.
+    Jamb,
+    /// Far beyond the line, or no echo.
+    Through,
 }
 
-/// Open doors in the walls of `scan`.
+/// One beam crossing a wall's line.
+#[derive(Clone, Copy, Debug)]
+struct Crossing {
+    /// Along-wall coordinate where the beam crosses the line, m.
+    t_cross: f64,
+    /// Along-wall coordinate of the echo (`t_cross` for no echo), m.
+    t_echo: f64,
+    class: Hit,
+    /// Range to the wall line along the beam, m.
+    r_wall: f64,
+}
+
+/// Open doors in the walls of `scan`, each reported once (on the wall that
+/// rests on the most measurements when walls overlap).
 pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpening> {
     let mut doors = Vec::new();
     let gate = 3.0 * cfg.range_sigma_m;
-    for (wi, wall) in walls.iter().enumerate() {
+    let mut run: Vec<Crossing> = Vec::new();
+    let mut order: Vec<usize> = (0..walls.len()).collect();
+    order.sort_by_key(|&w| std::cmp::Reverse(walls[w].points));
+    for wi in order {
+        let wall = &walls[wi];
+        if wall.points < cfg.min_wall_points
+            || wall.rms_residual_m > cfg.max_wall_rms_sigmas * cfg.range_sigma_m
+        {
+            continue;
+        }
         let n = wall.normal();
         let u = wall.direction();
         let t_lo = u.dot(&wall.ends[0].coords) - cfg.max_width_m;
         let t_hi = u.dot(&wall.ends[1].coords) + cfg.max_width_m;
-        // (beam, along-wall coordinate of its crossing, class, range to the wall)
-        let mut run: Vec<(usize, f64, Hit, f64)> = Vec::new();
-        let mut flush = |run: &mut Vec<(usize, f64, Hit, f64)>| {
-            scan_run(run, wi, wall, cfg, &mut doors);
+        let flush = |run: &mut Vec<Crossing>, doors: &mut Vec<DoorOpening>| {
+            scan_run(run, wi, wall, cfg, doors);
             run.clear();
         };
         for i in 0..scan.len() {
@@ -93,71 +157,183 @@ pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpen
             let dir = Vector2::new(phi.cos(), phi.sin());
             let c = dir.dot(&n);
             if c < 0.05 {
-                flush(&mut run);
+                flush(&mut run, &mut doors);
                 continue;
             }
             let r_wall = wall.d_m / c;
-            let t = u.dot(&(dir * r_wall));
-            if t < t_lo || t > t_hi {
-                flush(&mut run);
+            let t_cross = u.dot(&(dir * r_wall));
+            if t_cross < t_lo || t_cross > t_hi {
+                flush(&mut run, &mut doors);
                 continue;
             }
             let r = scan.ranges_m[i];
-            let class = if !r.is_finite() || r > r_wall + gate {
-                Hit::Beyond
-            } else if r < r_wall - gate {
+            let depth = (r - r_wall) * c;
+            let class = if r.is_finite() && r < r_wall - gate {
                 Hit::InFront
-            } else {
+            } else if r.is_finite() && r <= r_wall + gate {
                 Hit::OnWall
+            } else if r.is_finite() && depth <= cfg.max_jamb_depth_m {
+                Hit::Jamb
+            } else {
+                Hit::Through
             };
-            run.push((i, t, class, r_wall));
+            let t_echo = if r.is_finite() {
+                u.dot(&(dir * r))
+            } else {
+                t_cross
+            };
+            run.push(Crossing {
+                t_cross,
+                t_echo,
+                class,
+                r_wall,
+            });
         }
-        flush(&mut run);
+        flush(&mut run, &mut doors);
     }
     doors
 }
 
-/// Finds wall–beyond…beyond–wall patterns in a run of consecutive beams
-/// crossing one wall.
+/// Stray beams through a wall (noise, a mixed echo) that do not end a
+/// stretch of it.
+const MAX_STRAY_BEAMS: usize = 2;
+
+/// A stretch of wall in a run: beams on the wall from `first` to `last`,
+/// with at most `MAX_STRAY_BEAMS` in a row through it, and any number in
+/// front of it or within its depth.
+#[derive(Clone, Copy, Debug)]
+struct Stretch {
+    first: usize,
+    last: usize,
+}
+
+/// Finds the openings between consecutive stretches of wall in a run of
+/// beams crossing one wall, and keeps those that look like doors.
 fn scan_run(
-    run: &[(usize, f64, Hit, f64)],
+    run: &[Crossing],
     wi: usize,
     wall: &Wall,
     cfg: &DoorConfig,
     out: &mut Vec<DoorOpening>,
 ) {
-    let mut k = 0;
-    while k + 1 < run.len() {
-        if !(run[k].2 == Hit::OnWall && run[k + 1].2 == Hit::Beyond) {
-            k += 1;
-            continue;
+    // Beams in front of the wall hide it without ending it (a table leg
+    // before a wall), and so do echoes within the wall's depth (a jamb seen
+    // at a slant); beams through it end a stretch after a few strays.
+    let mut stretches: Vec<Stretch> = Vec::new();
+    let mut strays = 0;
+    for (i, c) in run.iter().enumerate() {
+        match c.class {
+            Hit::OnWall => {
+                match stretches.last_mut() {
+                    Some(s) if strays <= MAX_STRAY_BEAMS => s.last = i,
+                    _ => stretches.push(Stretch { first: i, last: i }),
+                }
+                strays = 0;
+            }
+            Hit::InFront | Hit::Jamb => {}
+            Hit::Through => strays += 1,
         }
-        let mut e = k + 1;
-        while e < run.len() && run[e].2 == Hit::Beyond {
-            e += 1;
-        }
-        if e < run.len() && run[e].2 == Hit::OnWall && e - (k + 1) >= cfg.min_beams_through {
-            let frame = |on: &(usize, f64, Hit, f64), by: &(usize, f64, Hit, f64)| {
-                let t = 0.5 * (on.1 + by.1);
-                let step = (by.1 - on.1).abs();
-                // Footprint across the beam, stretched along the wall by the incidence.
-                let cos_inc = wall.d_m / on.3;
-                let foot = cfg.beam_width.at(on.3) / cos_inc.max(0.05);
-                (t, (step * step + foot * foot) / 12.0)
-            };
-            let (ta, va) = frame(&run[k], &run[k + 1]);
-            let (tb, vb) = frame(&run[e], &run[e - 1]);
-            let width = (tb - ta).abs();
-            let frame_sigma = va.max(vb).sqrt();
-            if width >= cfg.min_width_m
-                && width <= cfg.max_width_m
-                && frame_sigma <= cfg.max_frame_sigma_m
-            {
-                out.push(opening(wi, wall, ta.min(tb), ta.max(tb), va + vb));
+    }
+    for pair in stretches.windows(2) {
+        if let Some(door) = opening_between(run, pair[0], pair[1], wi, wall, cfg) {
+            let duplicate = out
+                .iter()
+                .any(|d| (d.center - door.center).norm() < 0.5 * cfg.min_width_m);
+            if !duplicate {
+                out.push(door);
             }
         }
-        k = e;
     }
+}
+
+/// The opening between two stretches of wall, if it is a door.
+fn opening_between(
+    run: &[Crossing],
+    a: Stretch,
+    b: Stretch,
+    wi: usize,
+    wall: &Wall,
+    cfg: &DoorConfig,
+) -> Option<DoorOpening> {
+    let gap = &run[a.last + 1..b.first];
+    // Something in front of the opening may hide part of it (a table leg),
+    // but not its frames.
+    let frame_hidden = |c: &Crossing| c.class == Hit::InFront;
+    if gap.first().is_none_or(frame_hidden) || gap.last().is_none_or(frame_hidden) {
+        return None;
+    }
+    let through: Vec<usize> = (0..gap.len())
+        .filter(|&i| gap[i].class == Hit::Through)
+        .collect();
+    let (&first, &last) = (through.first()?, through.last()?);
+    if through.len() < cfg.min_beams_through {
+        return None;
+    }
+    // Wall on both sides, long enough to be a wall and not a leg or a
+    // person. A short stretch must end in something nearer (the next wall
+    // at a corner, or an object hiding the rest): one that ends with free
+    // space behind it is the rounded side of a person or a post.
+    let side_ok = |s: Stretch, frame: usize, outside: Option<usize>| {
+        let reach = (s.first..=s.last)
+            .filter(|&i| run[i].class == Hit::OnWall)
+            .map(|i| (run[i].t_echo - run[frame].t_echo).abs())
+            .fold(0.0, f64::max);
+        let closed = outside.is_some_and(|i| run[i].class == Hit::InFront);
+        reach >= cfg.min_side_m || (reach >= cfg.min_closed_side_m && closed)
+    };
+    let before = side_ok(a, a.last, a.first.checked_sub(1));
+    let after = side_ok(b, b.first, Some(b.last + 1).filter(|&i| i < run.len()));
+    if !before || !after {
+        return None;
+    }
+    // One frame per side: from the jamb's face where beams hit it, else
+    // half a beam step past the last echo on the wall. Jamb
+    // echoes spread along the wall are a wall behind something standing in
+    // front of it (a radiator), not a jamb: no door there.
+    let max_jamb_spread = 0.1f64.max(4.0 * cfg.range_sigma_m);
+    let frame = |solid: &Crossing, jambs: &[Crossing], next: &Crossing| {
+        let cos_inc = wall.d_m / solid.r_wall;
+        if jambs.is_empty() {
+            // The edge lies between the last echo on the wall and where the
+            // next beam would have met it: half a step on. (The next beam's
+            // own crossing is no bound: it may clear the jamb's back edge
+            // well inside the opening.)
+            let step = next.t_cross - solid.t_cross;
+            // Footprint across the beam, stretched along the wall by the incidence.
+            let foot = cfg.beam_width.at(solid.r_wall) / cos_inc.max(0.05);
+            let mixed = (0.5 - cfg.mixed_echo_fraction).max(0.0) * foot;
+            Some((
+                solid.t_echo + 0.5 * step - mixed * step.signum(),
+                (step * step + foot * foot) / 12.0,
+            ))
+        } else {
+            if jambs.iter().any(frame_hidden) {
+                return None;
+            }
+            let mut t: Vec<f64> = jambs.iter().map(|j| j.t_echo).collect();
+            t.sort_by(f64::total_cmp);
+            if t[t.len() - 1] - t[0] > max_jamb_spread {
+                return None;
+            }
+            let sin_inc = (1.0 - cos_inc * cos_inc).max(0.0).sqrt();
+            let s = cfg.range_sigma_m * sin_inc;
+            let foot = cfg.beam_width.at(solid.r_wall);
+            Some((
+                t[t.len() / 2],
+                (s * s + foot * foot / 12.0) / t.len() as f64,
+            ))
+        }
+    };
+    let (ta, va) = frame(&run[a.last], &gap[..first], &gap[0])?;
+    let (tb, vb) = frame(&run[b.first], &gap[last + 1..], &gap[gap.len() - 1])?;
+    let width = (tb - ta).abs();
+    let width_sigma = (va + vb).sqrt();
+    let frame_sigma = va.max(vb).sqrt();
+    // The width gate allows for the measurement's own uncertainty.
+    let door_sized = width + 2.0 * width_sigma >= cfg.min_width_m
+        && width - 2.0 * width_sigma <= cfg.max_width_m;
+    (door_sized && frame_sigma <= cfg.max_frame_sigma_m)
+        .then(|| opening(wi, wall, ta.min(tb), ta.max(tb), va + vb))
 }
 
 fn opening(wi: usize, wall: &Wall, ta: f64, tb: f64, var_sum: f64) -> DoorOpening {

@@ -6,7 +6,7 @@ use crate::NavError;
 use crate::extractor::WallExtractor;
 use crate::hough::{HoughConfig, HoughTransform, Weighting};
 use crate::line_fit::{FitConfig, LineFitter};
-use crate::points::ScanPoints;
+use crate::points::{ScanPoint, ScanPoints};
 use crate::wall::Wall;
 use serde::{Deserialize, Serialize};
 
@@ -26,6 +26,9 @@ pub struct RwhtConfig {
     pub max_candidates: usize,
     /// Walls returned per scan, at most.
     pub max_walls: usize,
+    /// Transforms computed per scan, at most: after the first, each one
+    /// transforms the measurements no wall has taken yet.
+    pub max_passes: usize,
 }
 
 impl Default for RwhtConfig {
@@ -36,6 +39,7 @@ impl Default for RwhtConfig {
             min_peak_m: 0.3,
             max_candidates: 48,
             max_walls: 24,
+            max_passes: 2,
         }
     }
 }
@@ -60,6 +64,8 @@ pub struct RwhtExtractor {
     fitter: LineFitter,
     taken: Vec<bool>,
     candidates: Vec<Candidate>,
+    /// The measurements not yet taken by a wall, for later passes.
+    left: Vec<ScanPoint>,
 }
 
 impl RwhtExtractor {
@@ -73,6 +79,7 @@ impl RwhtExtractor {
             fitter,
             taken: Vec::new(),
             candidates: Vec::new(),
+            left: Vec::new(),
         })
     }
 
@@ -144,12 +151,41 @@ impl WallExtractor for RwhtExtractor {
 
     fn extract(&mut self, points: &ScanPoints) -> Vec<Wall> {
         let pts = points.points();
-        self.hough.compute(pts);
         self.taken.clear();
         self.taken.extend(pts.iter().map(|p| !self.hough.uses(p)));
         let threshold = self.threshold(points.angle_increment_rad());
-        self.find_candidates(threshold);
         let mut walls = Vec::new();
+        // A wall whose cell sits beside a stronger peak is no local maximum
+        // until that peak's measurements are gone: when the peaks of one
+        // transform are used up, transform what is left and search again.
+        for pass in 0..self.config.max_passes {
+            if pass == 0 {
+                self.hough.compute(pts);
+            } else {
+                self.left.clear();
+                self.left.extend(
+                    pts.iter()
+                        .zip(&self.taken)
+                        .filter(|(_, t)| !**t)
+                        .map(|(p, _)| *p),
+                );
+                self.hough.compute(&self.left);
+            }
+            self.find_candidates(threshold);
+            let before = walls.len();
+            self.take_peaks(pts, threshold, &mut walls);
+            if walls.len() == before || walls.len() >= self.config.max_walls {
+                break;
+            }
+        }
+        walls
+    }
+}
+
+impl RwhtExtractor {
+    /// Fits the candidates of the current transform, strongest first,
+    /// removing each wall's measurements from the scores of the rest.
+    fn take_peaks(&mut self, pts: &[ScanPoint], threshold: f64, walls: &mut Vec<Wall>) {
         while walls.len() < self.config.max_walls {
             let Some(best) = self
                 .candidates
@@ -178,6 +214,5 @@ impl WallExtractor for RwhtExtractor {
             }
             walls.push(fit.wall);
         }
-        walls
     }
 }
