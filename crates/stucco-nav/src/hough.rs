@@ -24,7 +24,6 @@ use crate::NavError;
 use crate::points::ScanPoint;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
-use stucco_core::wrap_angle;
 
 /// The weighting `g` of the transform.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -106,13 +105,23 @@ pub struct HoughTransform {
     config: HoughConfig,
     distance_bins: usize,
     acc: Vec<f32>,
+    /// Unit normals at the lower edge of each angle bin, `γ_k − ½Δγ`: the
+    /// distance of a point along them bounds its votes without trigonometry.
+    edges: Vec<[f64; 2]>,
+    /// Unit normals at the bins' centres.
+    centres: Vec<[f64; 2]>,
 }
 
 impl HoughTransform {
     /// An empty transform.
     pub fn new(config: HoughConfig) -> Result<Self, NavError> {
         config.validate()?;
+        let n = config.angle_bins;
+        let step = config.angle_resolution_rad();
+        let unit = |a: f64| [a.cos(), a.sin()];
         Ok(HoughTransform {
+            edges: (0..n).map(|k| unit((k as f64 - 0.5) * step)).collect(),
+            centres: (0..n).map(|k| unit(k as f64 * step)).collect(),
             config,
             distance_bins: 0,
             acc: Vec::new(),
@@ -179,12 +188,16 @@ impl HoughTransform {
             // Bins within 90° (and half a bin) of the bearing: the lines this
             // point can face.
             let first = ((p.bearing_rad - PI / 2.0) / step - 0.5).ceil() as i64;
-            for m in 0..(n / 2 + 2) as i64 {
-                let k = (first + m).rem_euclid(n as i64) as usize;
+            let mut k = first.rem_euclid(n as i64) as usize;
+            for _ in 0..n / 2 + 2 {
                 if let Some((lo, hi, g)) = self.span(p, k) {
                     let row = &mut self.acc[k * self.distance_bins..(k + 1) * self.distance_bins];
                     row[lo] += g as f32;
                     row[hi + 1] -= g as f32;
+                }
+                k += 1;
+                if k == n {
+                    k = 0;
                 }
             }
         }
@@ -200,32 +213,38 @@ impl HoughTransform {
 
     /// The distance bins `lo..=hi` of row `k` that `p` votes for, and the
     /// weight of its vote; `None` when it votes for none.
+    #[inline]
     fn span(&self, p: &ScanPoint, k: usize) -> Option<(usize, usize, f64)> {
         let cfg = &self.config;
-        let half = cfg.angle_resolution_rad() / 2.0;
-        let off = wrap_angle(p.bearing_rad - self.gamma(k));
-        // ρ(γ) = r·cos(φ − γ) over the cell's angles [γ_k − ½Δγ, γ_k + ½Δγ].
-        let (c1, c2) = ((off - half).cos(), (off + half).cos());
-        let rho_max = if off.abs() <= half {
-            p.range_m
-        } else {
-            p.range_m * c1.max(c2)
-        };
+        let n = self.edges.len();
+        let (x, y) = (p.p.x, p.p.y);
+        // ρ(γ) = x·cos γ + y·sin γ at the cell's two edges; inside the cell
+        // it peaks at r where γ meets the bearing.
+        let [c1, s1] = self.edges[k];
+        let [c2, s2] = self.edges[(k + 1) % n];
+        let (rho1, rho2) = (x * c1 + y * s1, x * c2 + y * s2);
+        // The bearing lies between the edges: (x, y) is left of edge 1 and
+        // right of edge 2.
+        let inside = c1 * y - s1 * x >= 0.0 && c2 * y - s2 * x <= 0.0;
+        let rho_max = if inside { p.range_m } else { rho1.max(rho2) };
         if rho_max <= 0.0 {
             return None;
         }
-        let rho_min = (p.range_m * c1.min(c2)).max(0.0);
+        let rho_min = rho1.min(rho2).max(0.0);
         let inv_res = 1.0 / cfg.distance_resolution_m;
         // Bin j covers distances [j·Δd, (j+1)·Δd).
-        let lo = ((rho_min - cfg.half_window_m) * inv_res).floor().max(0.0) as usize;
-        let hi = (((rho_max + cfg.half_window_m) * inv_res).floor() as usize)
-            .min(self.distance_bins - 2);
+        // Both are non-negative: truncation is the floor, and much cheaper.
+        let lo = ((rho_min - cfg.half_window_m) * inv_res).max(0.0) as usize;
+        let hi = (((rho_max + cfg.half_window_m) * inv_res) as usize).min(self.distance_bins - 2);
         if hi < lo {
             return None;
         }
         let g = match cfg.weighting {
             Weighting::Count => 1.0,
-            Weighting::SurfaceSampling => p.range_m * off.cos().max(0.0),
+            Weighting::SurfaceSampling => {
+                let [c, s] = self.centres[k];
+                (x * c + y * s).max(0.0)
+            }
             Weighting::Range => p.range_m,
         };
         Some((lo, hi, g))

@@ -63,20 +63,29 @@ pub(crate) struct LineFitter {
     along: Vec<(f64, usize)>,
 }
 
-/// A line in normal form, `n(γ)·p = d`.
+/// A line in normal form, `n(γ)·p = d`, with its normal at hand.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Line {
     pub d: f64,
     pub gamma: f64,
+    normal: Vector2<f64>,
 }
 
 impl Line {
-    fn normal(&self) -> Vector2<f64> {
-        let (s, c) = self.gamma.sin_cos();
-        Vector2::new(c, s)
+    /// The line `n(γ)·p = d`.
+    pub fn new(d: f64, gamma: f64) -> Self {
+        let (s, c) = gamma.sin_cos();
+        Line {
+            d,
+            gamma,
+            normal: Vector2::new(c, s),
+        }
     }
-    fn residual(&self, p: &Point2<f64>) -> f64 {
-        self.normal().dot(&p.coords) - self.d
+    pub fn normal(&self) -> Vector2<f64> {
+        self.normal
+    }
+    pub fn residual(&self, p: &Point2<f64>) -> f64 {
+        self.normal.dot(&p.coords) - self.d
     }
 }
 
@@ -293,8 +302,5 @@ pub(crate) fn weighted_tls(pts: &[ScanPoint], idx: &[usize], w: &[f64]) -> Optio
         d = -d;
         gamma += std::f64::consts::PI;
     }
-    Some(Line {
-        d,
-        gamma: wrap_angle(gamma),
-    })
+    Some(Line::new(d, wrap_angle(gamma)))
 }

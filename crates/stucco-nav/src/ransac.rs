@@ -109,15 +109,11 @@ impl RansacExtractor {
                 d = -d;
                 gamma += std::f64::consts::PI;
             }
-            let line = Line {
-                d,
-                gamma: wrap_angle(gamma),
-            };
-            let (s, c) = line.gamma.sin_cos();
+            let line = Line::new(d, wrap_angle(gamma));
             let support = self
                 .free
                 .iter()
-                .filter(|&&i| (pts[i].p.x * c + pts[i].p.y * s - line.d).abs() < thr)
+                .filter(|&&i| line.residual(&pts[i].p).abs() < thr)
                 .count();
             if best.is_none_or(|(_, n)| support > n) {
                 best = Some((line, support));
@@ -156,8 +152,7 @@ impl WallExtractor for RansacExtractor {
                 break;
             }
             let thr = self.config.inlier_threshold_m;
-            let (s, c) = line.gamma.sin_cos();
-            let supports = |p: &ScanPoint| (p.p.x * c + p.p.y * s - line.d).abs() < thr;
+            let supports = |p: &ScanPoint| line.residual(&p.p).abs() < thr;
             match self.fitter.fit(pts, &self.taken, supports) {
                 Some(fit) => {
                     for &i in &fit.support {
