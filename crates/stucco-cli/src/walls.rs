@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use stucco_core::{LaserSpec, Pose2, wrap_angle};
 use stucco_nav::{
-    DoorConfig, DoorOpening, FitConfig, RansacConfig, RansacExtractor, RwhtConfig, RwhtExtractor,
-    ScanPoints, Wall, WallExtractor, find_doors,
+    DoorConfig, DoorOpening, FitConfig, HoughConfig, RansacConfig, RansacExtractor, RwhtConfig,
+    RwhtExtractor, ScanPoints, Wall, WallExtractor, find_doors,
 };
 
 /// Which extractor `stucco walls` runs.
@@ -85,6 +85,10 @@ pub fn make_extractor(kind: ExtractorKind, laser: &LaserSpec) -> Result<Box<dyn 
     };
     Ok(match kind {
         ExtractorKind::Rwht => Box::new(RwhtExtractor::new(RwhtConfig {
+            hough: HoughConfig {
+                surface_noise_m: laser.range_sigma_m,
+                ..HoughConfig::default()
+            },
             fit,
             ..RwhtConfig::default()
         })?),
