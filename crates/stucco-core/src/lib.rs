@@ -7,6 +7,10 @@
 //!   no-return marking.
 //! - [`LaserSpec`]: the range-finders of the source papers as presets
 //!   (IBEO Ladar-2D, Hokuyo URG, Hokuyo UTM-30, SICK LMS291).
+//! - [`VehicleSpec`]: the papers' tricycle, its limits and sensor mounts.
+//! - [`Platform`]: the port to a robot or the simulator — [`DriveCommand`]
+//!   in, [`Readings`] ([`EncoderSample`], [`Scan`], [`RangeProfile`],
+//!   bumper) out, time advanced by the caller.
 //!
 //! ```
 //! use stucco_core::{LaserSpec, Pose2, Scan, Stamp};
@@ -21,14 +25,18 @@
 #![warn(missing_docs)]
 
 mod laser;
+mod platform;
 mod pose;
 mod scan;
 mod stamp;
+mod vehicle;
 
 pub use laser::{BeamWidth, LaserSpec};
+pub use platform::{DriveCommand, EncoderSample, Platform, RangeProfile, Readings};
 pub use pose::{Pose2, Twist2, wrap_angle};
 pub use scan::{Beam, Scan};
 pub use stamp::{ParseStampError, Stamp};
+pub use vehicle::VehicleSpec;
 
 /// Re-export of the linear-algebra crate the public API uses.
 pub use nalgebra;

@@ -1,0 +1,46 @@
+//! The simulator of stucco: a rapier3d world built from a world file, the
+//! papers' tricycle with actuator limits, slip and skid, a scanning laser
+//! cast beam by beam through rapier's query pipeline while the robot moves,
+//! a range camera, rear-wheel encoders, injectable faults, and ground truth
+//! kept apart from what the robot's software sees.
+//!
+//! - [`WorldSpec`]: a world file (`sim/worlds/*.toml`), parsed and checked.
+//! - [`Layout`]: its solids and its truth (walls, openings, rooms).
+//! - [`Simulator`]: implements [`stucco_core::Platform`]; [`Simulator::truth`]
+//!   is the truth about the robot.
+//!
+//! ```
+//! use stucco_core::{DriveCommand, Platform};
+//! use stucco_sim::{SimConfig, Simulator, WorldSpec};
+//!
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/worlds/reference-room.toml");
+//! let world = WorldSpec::load(std::path::Path::new(path)).expect("a world");
+//! let mut sim = Simulator::new(&world, SimConfig::default(), None);
+//! sim.command(DriveCommand { speed_mps: 0.3, steer_rad: 0.0 });
+//! let readings = sim.advance(0.5);
+//! assert_eq!(readings.encoders.len(), 25); // 50 Hz
+//! assert_eq!(readings.scans.len(), 4); // 8 Hz
+//! assert!(sim.truth().drive.pose.x > world.robot.at[0]);
+//! ```
+#![warn(missing_docs)]
+
+mod error;
+mod layout;
+mod scene;
+mod sensors;
+mod simulator;
+mod trace;
+mod vehicle;
+mod world;
+
+pub use error::SimError;
+pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, TrueWall};
+pub use scene::Scene;
+pub use sensors::{CameraSpec, FaultConfig, StuckEncoder};
+pub use simulator::{SimConfig, Simulator, Truth};
+pub use trace::TraceHash;
+pub use vehicle::{DriveState, DynamicsConfig};
+pub use world::{
+    BoxSpec, ColumnSpec, DoorSpec, PersonSpec, RadiatorSpec, RobotStart, RoomSpec, TableSpec,
+    WindowSpec, WorldSpec,
+};

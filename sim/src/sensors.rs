@@ -1,0 +1,325 @@
+//! The scanning laser and the range camera, cast through rapier's query
+//! pipeline, and the faults a configuration can inject.
+
+use crate::scene::{GLASS, Scene};
+use rand::{Rng, RngExt};
+use rand_distr::{Distribution, Normal};
+use rapier3d::prelude::*;
+use serde::{Deserialize, Serialize};
+use stucco_core::{LaserSpec, Pose2, RangeProfile, Scan, Stamp, Twist2};
+
+/// Glass returns the laser only this close to normal incidence, rad (10°).
+const GLASS_MAX_INCIDENCE_RAD: f64 = 10.0 * std::f64::consts::PI / 180.0;
+/// Sub-rays across the footprint of a beam that straddles an edge.
+const SUB_RAYS: usize = 5;
+/// Two echoes closer than this along a beam come from one surface, m.
+const SAME_SURFACE_M: f64 = 0.05;
+
+/// Faults injected into the sensors.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FaultConfig {
+    /// Chance that a whole scan is lost.
+    pub scan_drop_probability: f64,
+    /// Chance that a beam returns a spurious echo short of the true range.
+    pub spurious_return_probability: f64,
+    /// Scans reach the robot this late, s.
+    pub scan_delay_s: f64,
+    /// An encoder that stops counting for a while.
+    pub stuck_encoder: Option<StuckEncoder>,
+}
+
+/// An encoder wheel whose counter freezes from `from_s` to `until_s`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StuckEncoder {
+    /// 0: left, 1: right.
+    pub wheel: usize,
+    /// Start of the fault, s.
+    pub from_s: f64,
+    /// End of the fault, s.
+    pub until_s: f64,
+}
+
+/// A range camera scanning a vertical fan of rays.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraSpec {
+    /// Name, the sensor id of its profiles.
+    pub name: String,
+    /// Heading of the fan's plane in the robot's frame, rad (π/2: left).
+    pub azimuth_rad: f64,
+    /// Lowest and highest elevation, rad.
+    pub elevation_rad: [f64; 2],
+    /// Rays in the fan.
+    pub rays: usize,
+    /// Profiles per second.
+    pub rate_hz: f64,
+    /// Height of the sensor above the floor, m.
+    pub height_m: f64,
+    /// Range noise, m (σ).
+    pub range_sigma_m: f64,
+    /// Longest range, m.
+    pub max_range_m: f64,
+}
+
+impl Default for CameraSpec {
+    /// Looking left, from 35° below the horizontal to straight up.
+    fn default() -> Self {
+        CameraSpec {
+            name: "range-camera".to_owned(),
+            azimuth_rad: std::f64::consts::FRAC_PI_2,
+            elevation_rad: [-0.6, std::f64::consts::FRAC_PI_2],
+            rays: 96,
+            rate_hz: 5.0,
+            height_m: 1.0,
+            range_sigma_m: 0.01,
+            max_range_m: 8.0,
+        }
+    }
+}
+
+fn v3(x: f64, y: f64, z: f64) -> Vector {
+    Vector::new(x as Real, y as Real, z as Real)
+}
+
+/// The first surface along a ray that returns the light: glass only near
+/// normal incidence. `None`: nothing within `max_m`.
+pub fn cast(scene: &Scene, origin: [f64; 3], dir: [f64; 3], max_m: f64) -> Option<f64> {
+    let mut from = 0.0;
+    let mut skip: Option<ColliderHandle> = None;
+    for _ in 0..4 {
+        let mut filter = QueryFilter::default().exclude_rigid_body(scene.robot);
+        if let Some(s) = skip {
+            filter = filter.exclude_collider(s);
+        }
+        let q = scene.world.query_pipeline_with_filter(filter);
+        let o = v3(
+            origin[0] + dir[0] * from,
+            origin[1] + dir[1] * from,
+            origin[2] + dir[2] * from,
+        );
+        let ray = Ray::new(o, v3(dir[0], dir[1], dir[2]));
+        let (handle, hit) = q.cast_ray_and_get_normal(&ray, (max_m - from) as Real, true)?;
+        let range = from + f64::from(hit.time_of_impact);
+        let glass = scene
+            .world
+            .colliders
+            .get(handle)
+            .is_some_and(|c| c.user_data == GLASS);
+        if !glass {
+            return Some(range);
+        }
+        let n = hit.normal;
+        let cos_inc =
+            -(f64::from(n.x) * dir[0] + f64::from(n.y) * dir[1] + f64::from(n.z) * dir[2]);
+        if cos_inc.abs() >= GLASS_MAX_INCIDENCE_RAD.cos() {
+            return Some(range);
+        }
+        from = range;
+        skip = Some(handle);
+    }
+    None
+}
+
+/// The laser: beams cast one by one at their own time during the sweep.
+#[derive(Clone, Debug)]
+pub struct LaserRig {
+    spec: LaserSpec,
+    mount: Pose2,
+    height_m: f64,
+    period_ns: i64,
+    /// Start of the scan under way, ns.
+    scan_start_ns: i64,
+    ranges: Vec<f64>,
+}
+
+impl LaserRig {
+    /// A laser of `spec` at `mount` on the robot, `height_m` above the floor.
+    pub fn new(spec: LaserSpec, mount: Pose2, height_m: f64) -> Self {
+        let period_ns = (1e9 / spec.rate_hz.max(1e-6)).round() as i64;
+        LaserRig {
+            ranges: Vec::with_capacity(spec.beams),
+            spec,
+            mount,
+            height_m,
+            period_ns,
+            scan_start_ns: 0,
+        }
+    }
+
+    fn beam_time_ns(&self, i: usize) -> i64 {
+        let n = self.spec.beams.max(2) - 1;
+        self.scan_start_ns
+            + (self.spec.sweep_duration_s() * 1e9 * i as f64 / n as f64).round() as i64
+    }
+
+    /// Casts the beams due in `[t0, t1)` from a robot at `pose0` at `t0`
+    /// moving with `twist`; returns the scans completed.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sweep(
+        &mut self,
+        scene: &Scene,
+        t0_ns: i64,
+        t1_ns: i64,
+        pose0: &Pose2,
+        twist: &Twist2,
+        faults: &FaultConfig,
+        rng: &mut impl Rng,
+    ) -> Vec<Scan> {
+        let mut done = Vec::new();
+        let noise = Normal::new(0.0, self.spec.range_sigma_m.max(1e-12)).ok();
+        loop {
+            let i = self.ranges.len();
+            let t = self.beam_time_ns(i);
+            if t >= t1_ns {
+                break;
+            }
+            let robot = *pose0 * twist.displacement((t - t0_ns) as f64 * 1e-9);
+            let sensor = robot * self.mount;
+            let phi = sensor.theta + self.spec.beam_angle(i);
+            let mut r = self.echo(scene, &sensor, phi);
+            if let Some(prev) = self.ranges.last().copied() {
+                let edge = match (prev.is_finite(), r) {
+                    (true, Some(x)) => (x - prev).abs() > SAME_SURFACE_M,
+                    (false, None) => false,
+                    _ => true,
+                };
+                if edge {
+                    r = self.footprint_echo(scene, &sensor, phi);
+                }
+            }
+            let mut range = match r {
+                Some(x) => x + noise.map_or(0.0, |n| n.sample(rng)),
+                None => f64::INFINITY,
+            };
+            if faults.spurious_return_probability > 0.0
+                && rng.random::<f64>() < faults.spurious_return_probability
+            {
+                let far = if range.is_finite() {
+                    range
+                } else {
+                    self.spec.max_range_m
+                };
+                range = self.spec.min_range_m
+                    + rng.random::<f64>() * (far - self.spec.min_range_m).max(0.0);
+            }
+            // Raw ranges are kept (finite or not) for edge tests; Scan::new
+            // marks what the sensor cannot report.
+            self.ranges.push(range);
+            if self.ranges.len() == self.spec.beams {
+                let stamp = Stamp::from_nanos(self.scan_start_ns);
+                let scan = Scan::from_spec(&self.spec, stamp, self.ranges.drain(..));
+                if !(faults.scan_drop_probability > 0.0
+                    && rng.random::<f64>() < faults.scan_drop_probability)
+                {
+                    done.push(scan);
+                }
+                self.scan_start_ns += self.period_ns;
+            }
+        }
+        done
+    }
+
+    fn echo(&self, scene: &Scene, sensor: &Pose2, phi: f64) -> Option<f64> {
+        cast(
+            scene,
+            [sensor.x, sensor.y, self.height_m],
+            [phi.cos(), phi.sin(), 0.0],
+            self.spec.max_range_m,
+        )
+    }
+
+    /// The echo of a beam whose footprint may straddle an edge: sub-rays
+    /// across it, and the first surface that catches a third of them (a
+    /// pulse laser reports the first strong echo), at their mean range.
+    fn footprint_echo(&self, scene: &Scene, sensor: &Pose2, phi: f64) -> Option<f64> {
+        let w = &self.spec.beam_width;
+        let mut hits: Vec<f64> = (0..SUB_RAYS)
+            .filter_map(|s| {
+                let f = s as f64 / (SUB_RAYS - 1) as f64 - 0.5;
+                let a = phi + f * w.per_m;
+                let side = f * w.base_m;
+                let o = [
+                    sensor.x - phi.sin() * side,
+                    sensor.y + phi.cos() * side,
+                    self.height_m,
+                ];
+                cast(scene, o, [a.cos(), a.sin(), 0.0], self.spec.max_range_m)
+            })
+            .collect();
+        hits.sort_by(f64::total_cmp);
+        let need = SUB_RAYS.div_ceil(3);
+        let mut start = 0;
+        for end in 1..=hits.len() {
+            if end == hits.len() || hits[end] - hits[end - 1] >= SAME_SURFACE_M {
+                if end - start >= need {
+                    return Some(hits[start..end].iter().sum::<f64>() / (end - start) as f64);
+                }
+                start = end;
+            }
+        }
+        None
+    }
+}
+
+/// The range camera: one profile at a time, each taken at an instant.
+#[derive(Clone, Debug)]
+pub struct CameraRig {
+    spec: CameraSpec,
+    period_ns: i64,
+    next_ns: i64,
+}
+
+impl CameraRig {
+    /// A camera of `spec`.
+    pub fn new(spec: CameraSpec) -> Self {
+        CameraRig {
+            period_ns: (1e9 / spec.rate_hz.max(1e-6)).round() as i64,
+            next_ns: 0,
+            spec,
+        }
+    }
+
+    /// The profiles due before `t1_ns` from a robot at `pose`.
+    pub fn shoot(
+        &mut self,
+        scene: &Scene,
+        t1_ns: i64,
+        pose: &Pose2,
+        rng: &mut impl Rng,
+    ) -> Vec<RangeProfile> {
+        let mut out = Vec::new();
+        let noise = Normal::new(0.0, self.spec.range_sigma_m.max(1e-12)).ok();
+        while self.next_ns < t1_ns {
+            let s = &self.spec;
+            let az = pose.theta + s.azimuth_rad;
+            let n = s.rays.max(2);
+            let elevations: Vec<f64> = (0..n)
+                .map(|i| {
+                    s.elevation_rad[0]
+                        + (s.elevation_rad[1] - s.elevation_rad[0]) * i as f64 / (n - 1) as f64
+                })
+                .collect();
+            let ranges = elevations
+                .iter()
+                .map(|&el| {
+                    let dir = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+                    match cast(scene, [pose.x, pose.y, s.height_m], dir, s.max_range_m) {
+                        Some(r) => r + noise.map_or(0.0, |n| n.sample(rng)),
+                        None => f64::INFINITY,
+                    }
+                })
+                .collect();
+            out.push(RangeProfile {
+                stamp: Stamp::from_nanos(self.next_ns),
+                sensor: s.name.clone(),
+                azimuth_rad: s.azimuth_rad,
+                elevations_rad: elevations,
+                ranges_m: ranges,
+            });
+            self.next_ns += self.period_ns;
+        }
+        out
+    }
+}

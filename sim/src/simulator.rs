@@ -1,0 +1,216 @@
+//! The simulator: a world, a robot and its sensors stepped in fixed
+//! physics steps of simulated time. It is a [`Platform`]; ground truth is
+//! kept apart, in [`Simulator::truth`] and [`Simulator::layout`].
+
+use crate::layout::Layout;
+use crate::scene::Scene;
+use crate::sensors::{CameraRig, CameraSpec, FaultConfig, LaserRig};
+use crate::vehicle::{Drive, DriveState, DynamicsConfig};
+use crate::world::WorldSpec;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use stucco_core::{
+    DriveCommand, EncoderSample, LaserSpec, Platform, Pose2, Readings, Scan, Stamp, VehicleSpec,
+};
+
+/// How to simulate: the robot, its sensors, the floor and the faults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// The robot.
+    pub vehicle: VehicleSpec,
+    /// Its scanning laser.
+    pub laser: LaserSpec,
+    /// Its range camera, if it has one.
+    pub camera: Option<CameraSpec>,
+    /// Tyres, slip and encoder errors.
+    pub dynamics: DynamicsConfig,
+    /// Sensor faults.
+    pub faults: FaultConfig,
+    /// Physics steps per second.
+    pub physics_rate_hz: f64,
+}
+
+impl Default for SimConfig {
+    /// The papers' robot with the IBEO laser, a range camera looking left,
+    /// physics at 100 Hz.
+    fn default() -> Self {
+        SimConfig {
+            vehicle: VehicleSpec::default(),
+            laser: LaserSpec::ibeo_ladar_2d(),
+            camera: Some(CameraSpec::default()),
+            dynamics: DynamicsConfig::default(),
+            faults: FaultConfig::default(),
+            physics_rate_hz: 100.0,
+        }
+    }
+}
+
+/// The truth about the robot, for tests and reports only.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Truth {
+    /// Simulated time.
+    pub stamp: Stamp,
+    /// The drive's true state.
+    pub drive: DriveState,
+    /// True when the robot is pressed against something.
+    pub bumper: bool,
+    /// People's poses.
+    pub people: Vec<Pose2>,
+}
+
+/// A simulation of one robot in one world.
+pub struct Simulator {
+    layout: Layout,
+    scene: Scene,
+    drive: Drive,
+    laser: LaserRig,
+    camera: Option<CameraRig>,
+    faults: FaultConfig,
+    rng: ChaCha8Rng,
+    step_ns: i64,
+    now_ns: i64,
+    odometry_period_ns: i64,
+    next_odometry_ns: i64,
+    command: DriveCommand,
+    bumper: bool,
+    /// Scans held back by a delay fault: (due, scan).
+    delayed: VecDeque<(i64, Scan)>,
+    /// Encoder counts frozen by a stuck-encoder fault.
+    frozen: Option<EncoderSample>,
+}
+
+impl Simulator {
+    /// A simulation of `world` with `config`; `seed` overrides the world's.
+    pub fn new(world: &WorldSpec, config: SimConfig, seed: Option<u64>) -> Simulator {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed.unwrap_or(world.seed));
+        let layout = Layout::of(world);
+        let start = Pose2::new(
+            world.robot.at[0],
+            world.robot.at[1],
+            world.robot.heading_deg.to_radians(),
+        );
+        let scene = Scene::build(&layout, &world.people, &config.vehicle, &start, &mut rng);
+        let odometry_period_ns = (1e9 / config.vehicle.odometry_rate_hz.max(1e-6)).round() as i64;
+        Simulator {
+            laser: LaserRig::new(
+                config.laser.clone(),
+                config.vehicle.laser_mount,
+                config.vehicle.laser_height_m,
+            ),
+            camera: config.camera.clone().map(CameraRig::new),
+            drive: Drive::new(config.vehicle.clone(), config.dynamics.clone(), start),
+            faults: config.faults,
+            layout,
+            scene,
+            rng,
+            step_ns: (1e9 / config.physics_rate_hz.max(1.0)).round() as i64,
+            now_ns: 0,
+            odometry_period_ns,
+            next_odometry_ns: odometry_period_ns,
+            command: DriveCommand::STOP,
+            bumper: false,
+            delayed: VecDeque::new(),
+            frozen: None,
+        }
+    }
+
+    /// The true state of the robot.
+    pub fn truth(&self) -> Truth {
+        Truth {
+            stamp: Stamp::from_nanos(self.now_ns),
+            drive: self.drive.state().clone(),
+            bumper: self.bumper,
+            people: self.scene.people_at(self.now_ns as f64 * 1e-9),
+        }
+    }
+
+    /// The true walls, openings and rooms.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// One physics step: the drive moves unless something is in the way,
+    /// the people walk, the sensors read.
+    fn step(&mut self, out: &mut Readings) {
+        let dt = self.step_ns as f64 * 1e-9;
+        let (t0, t1) = (self.now_ns, self.now_ns + self.step_ns);
+        let before = self.drive.state().pose;
+        let next = self.drive.propose(&self.command, dt, &mut self.rng);
+        self.bumper = self.scene.blocked(&before, &next.pose);
+        if self.bumper {
+            self.drive.halt();
+            out.bumper = true;
+        } else {
+            self.drive.commit(next, dt, &mut self.rng);
+        }
+        let twist = self.drive.state().twist;
+        let pose = self.drive.state().pose;
+        self.scene.step_to(t1 as f64 * 1e-9, &pose, dt);
+        for scan in self.laser.sweep(
+            &self.scene,
+            t0,
+            t1,
+            &before,
+            &twist,
+            &self.faults,
+            &mut self.rng,
+        ) {
+            let due = scan.stamp.as_nanos() + (self.faults.scan_delay_s * 1e9).round() as i64;
+            self.delayed.push_back((due, scan));
+        }
+        if let Some(cam) = &mut self.camera {
+            out.profiles
+                .extend(cam.shoot(&self.scene, t1, &pose, &mut self.rng));
+        }
+        while self.next_odometry_ns <= t1 {
+            let stamp = Stamp::from_nanos(self.next_odometry_ns);
+            out.encoders.push(self.read_encoders(stamp));
+            self.next_odometry_ns += self.odometry_period_ns;
+        }
+        self.now_ns = t1;
+        while self.delayed.front().is_some_and(|(due, _)| *due <= t1) {
+            if let Some((_, scan)) = self.delayed.pop_front() {
+                out.scans.push(scan);
+            }
+        }
+    }
+
+    fn read_encoders(&mut self, stamp: Stamp) -> EncoderSample {
+        let mut sample = self.drive.encoders(stamp);
+        let t = stamp.as_secs_f64();
+        match &self.faults.stuck_encoder {
+            Some(f) if (f.from_s..f.until_s).contains(&t) => {
+                let held = *self.frozen.get_or_insert(sample);
+                if f.wheel == 0 {
+                    sample.left_ticks = held.left_ticks;
+                } else {
+                    sample.right_ticks = held.right_ticks;
+                }
+            }
+            _ => self.frozen = None,
+        }
+        sample
+    }
+}
+
+impl Platform for Simulator {
+    fn now(&self) -> Stamp {
+        Stamp::from_nanos(self.now_ns)
+    }
+
+    fn command(&mut self, drive: DriveCommand) {
+        self.command = drive;
+    }
+
+    fn advance(&mut self, dt_s: f64) -> Readings {
+        let mut out = Readings::default();
+        let steps = (dt_s * 1e9 / self.step_ns as f64).round().max(1.0) as usize;
+        for _ in 0..steps {
+            self.step(&mut out);
+        }
+        out
+    }
+}
