@@ -29,6 +29,7 @@ mod layout;
 mod scene;
 mod sensors;
 mod simulator;
+mod tour;
 mod trace;
 mod vehicle;
 mod world;
@@ -38,6 +39,7 @@ pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, Tr
 pub use scene::Scene;
 pub use sensors::{CameraSpec, FaultConfig, StuckEncoder};
 pub use simulator::{SimConfig, Simulator, Truth};
+pub use tour::TourDriver;
 pub use trace::TraceHash;
 pub use vehicle::{DriveState, DynamicsConfig};
 pub use world::{
