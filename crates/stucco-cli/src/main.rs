@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use stucco_cli::{ExtractorKind, WallsJob, run_walls};
+use stucco_cli::{ExtractorKind, SimbenchJob, WallsJob, run_simbench, run_walls};
 
 /// stucco: software of an autonomous spray-plastering robot.
 #[derive(Parser)]
@@ -35,11 +35,72 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run the simulator with one robot driving its world's tour and report
+    /// the real-time factor and a hash of every sensor reading.
+    Simbench {
+        /// The world file (`sim/worlds/*.toml`).
+        world: PathBuf,
+        /// Seed, instead of the world's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Simulated seconds to run.
+        #[arg(long, default_value_t = 60.0)]
+        sim_seconds: f64,
+        /// Print the report as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Prints `value` as one line of JSON.
+fn print_json(value: &impl serde::Serialize) -> ExitCode {
+    match serde_json::to_string(value) {
+        Ok(s) => {
+            println!("{s}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Simbench {
+            world,
+            seed,
+            sim_seconds,
+            json,
+        } => match run_simbench(&SimbenchJob {
+            world,
+            seed,
+            sim_seconds,
+        }) {
+            Ok(report) if json => print_json(&report),
+            Ok(r) => {
+                println!(
+                    "{}: {:.0} simulated s in {:.2} s — {:.0}× real time; {} scans ({} beams), {} odometry samples, {} profiles, {} bumps; trace {}",
+                    r.world,
+                    r.sim_seconds,
+                    r.wall_seconds,
+                    r.real_time_factor,
+                    r.scans,
+                    r.beams,
+                    r.encoder_samples,
+                    r.profiles,
+                    r.bumps,
+                    r.trace_hash
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Walls {
             log,
             extractor,
@@ -65,13 +126,7 @@ fn main() -> ExitCode {
             match result {
                 Ok(report) => {
                     if json {
-                        match serde_json::to_string(&report) {
-                            Ok(s) => println!("{s}"),
-                            Err(e) => {
-                                eprintln!("error: {e}");
-                                return ExitCode::FAILURE;
-                            }
-                        }
+                        return print_json(&report);
                     } else {
                         println!(
                             "{} scans of {} with {:?}: {:.2} walls and {:.2} doors a scan; extraction median {:.0} µs, p99 {:.0} µs; \
