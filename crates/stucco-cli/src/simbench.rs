@@ -55,7 +55,7 @@ pub fn run_simbench(job: &SimbenchJob) -> Result<SimbenchReport> {
     if world.tour.len() < 2 {
         bail!("{}: the world has no tour to drive", job.world.display());
     }
-    if !(job.sim_seconds > 0.0) {
+    if job.sim_seconds.is_nan() || job.sim_seconds <= 0.0 {
         bail!("--sim-seconds must be positive");
     }
     let config = SimConfig::default();
