@@ -26,6 +26,7 @@
 
 mod error;
 mod layout;
+mod plane;
 mod scene;
 mod sensors;
 mod simulator;
@@ -36,7 +37,9 @@ mod world;
 
 pub use error::SimError;
 pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, TrueWall};
+pub use plane::{PlaneCaster, ray_circle};
 pub use scene::Scene;
+pub use sensors::cast;
 pub use sensors::{CameraSpec, FaultConfig, StuckEncoder};
 pub use simulator::{SimConfig, Simulator, Truth};
 pub use tour::TourDriver;

@@ -1,8 +1,14 @@
-//! The rapier3d world of a layout: static colliders for every solid,
-//! kinematic bodies for the people and the robot. The z axis points up.
+//! The rapier3d world of a layout: static colliders for every solid, in
+//! one bounding-volume tree that is built once and never stepped; the
+//! robot's footprint is shape-cast against it. People walk outside it, as
+//! upright cylinders (two legs and a torso) that the sensors and the
+//! collision check meet where they are at the moment: moving them inside
+//! rapier would refit its tree at every step, a third of the simulator's
+//! time for a handful of people. The z axis points up.
 
 use crate::layout::{LEG_HALF_SPACING_M, LEG_RADIUS_M, Layout, Material, Solid};
 use crate::world::PersonSpec;
+use nalgebra::Point2;
 use rand::{Rng, RngExt};
 use rapier3d::parry::query::ShapeCastOptions;
 use rapier3d::parry::shape::Cuboid;
@@ -22,10 +28,54 @@ const PERSON_HEIGHT_M: f64 = 1.7;
 /// The robot's body clears the floor by this much, m.
 const GROUND_CLEARANCE_M: f64 = 0.05;
 
+/// An upright cylinder: centre of its footprint, radius, bottom and top.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Upright {
+    /// Centre, m.
+    pub at: Point2<f64>,
+    /// Radius, m.
+    pub radius: f64,
+    /// Bottom and top, m.
+    pub z: [f64; 2],
+}
+
+impl Upright {
+    /// Distance along the unit ray `o + s·d` to this cylinder, if hit.
+    pub fn cast(&self, o: [f64; 3], d: [f64; 3]) -> Option<f64> {
+        let mut best = f64::INFINITY;
+        // The side: a circle in the horizontal projection.
+        let h = d[0].hypot(d[1]);
+        if h > 1e-12 {
+            let dir = nalgebra::Vector2::new(d[0] / h, d[1] / h);
+            if let Some(s2) =
+                crate::plane::ray_circle(&Point2::new(o[0], o[1]), &dir, &self.at, self.radius)
+            {
+                let s = s2 / h;
+                let z = o[2] + d[2] * s;
+                if (self.z[0]..=self.z[1]).contains(&z) {
+                    best = s;
+                }
+            }
+        }
+        // The caps.
+        if d[2].abs() > 1e-12 {
+            for zc in self.z {
+                let s = (zc - o[2]) / d[2];
+                if s > 1e-9 && s < best {
+                    let (x, y) = (o[0] + d[0] * s - self.at.x, o[1] + d[1] * s - self.at.y);
+                    if x * x + y * y <= self.radius * self.radius {
+                        best = s;
+                    }
+                }
+            }
+        }
+        best.is_finite().then_some(best)
+    }
+}
+
 /// A person walking a closed path.
 #[derive(Clone, Debug)]
 pub struct Walker {
-    body: RigidBodyHandle,
     path: Vec<[f64; 2]>,
     speed_mps: f64,
     /// Where along the loop the person was at time zero, m.
@@ -34,6 +84,25 @@ pub struct Walker {
 }
 
 impl Walker {
+    /// The person's legs and torso at `t_s`.
+    pub fn body_at(&self, t_s: f64) -> [Upright; 3] {
+        let p = self.pose_at(t_s);
+        let leg = |side: f64| Upright {
+            at: p.transform_point(&Point2::new(0.0, side * LEG_HALF_SPACING_M)),
+            radius: LEG_RADIUS_M,
+            z: [0.0, LEG_HEIGHT_M],
+        };
+        [
+            leg(-1.0),
+            leg(1.0),
+            Upright {
+                at: p.position(),
+                radius: TORSO_RADIUS_M,
+                z: [LEG_HEIGHT_M, PERSON_HEIGHT_M],
+            },
+        ]
+    }
+
     /// Position and heading at `t_s`.
     pub fn pose_at(&self, t_s: f64) -> Pose2 {
         let mut s = (self.phase_m + self.speed_mps * t_s).rem_euclid(self.loop_m.max(1e-9));
@@ -55,18 +124,18 @@ impl Walker {
     }
 }
 
-/// The physics world and the handles the simulator needs.
+/// The static world in rapier, the people, and the robot's footprint.
 pub struct Scene {
-    /// Bodies, colliders and the query structures.
+    /// The static colliders and their query structures.
     pub world: PhysicsWorld,
-    /// The robot's kinematic body.
-    pub robot: RigidBodyHandle,
     /// The robot's footprint, for collision checks.
     pub robot_shape: Cuboid,
     /// Where the footprint's centre sits in the robot's frame, m.
     pub robot_shape_offset: [f64; 3],
     /// People.
     pub walkers: Vec<Walker>,
+    /// The people's legs and torsos now.
+    pub bodies: Vec<Upright>,
 }
 
 fn v3(x: f64, y: f64, z: f64) -> Vector {
@@ -79,12 +148,12 @@ pub fn pose3(p: &Pose2, z: f64) -> Pose {
 }
 
 impl Scene {
-    /// Builds the world of `layout` with `people`, and the robot at `start`.
+    /// Builds the static world of `layout`, the people of `people` (each
+    /// starting somewhere along its path), and the robot's footprint.
     pub fn build(
         layout: &Layout,
         people: &[PersonSpec],
         vehicle: &VehicleSpec,
-        start: &Pose2,
         rng: &mut impl Rng,
     ) -> Scene {
         let mut world = PhysicsWorld::new();
@@ -109,7 +178,7 @@ impl Scene {
             };
             world.insert_collider(collider, None);
         }
-        let walkers = people
+        let walkers: Vec<Walker> = people
             .iter()
             .map(|p| {
                 let loop_m: f64 = (0..p.path.len())
@@ -118,34 +187,12 @@ impl Scene {
                         (b[0] - a[0]).hypot(b[1] - a[1])
                     })
                     .sum();
-                let mut w = Walker {
-                    body: RigidBodyHandle::invalid(),
+                Walker {
                     path: p.path.clone(),
                     speed_mps: p.speed_mps,
                     phase_m: rng.random::<f64>() * loop_m,
                     loop_m,
-                };
-                let at = w.pose_at(0.0);
-                let body = world.insert_body(
-                    RigidBodyBuilder::kinematic_position_based().pose(pose3(&at, 0.0)),
-                );
-                for side in [-1.0, 1.0] {
-                    world.insert_collider(
-                        upright_cylinder(LEG_RADIUS_M, LEG_HEIGHT_M).translation(v3(
-                            0.0,
-                            side * LEG_HALF_SPACING_M,
-                            LEG_HEIGHT_M / 2.0,
-                        )),
-                        Some(body),
-                    );
                 }
-                world.insert_collider(
-                    upright_cylinder(TORSO_RADIUS_M, PERSON_HEIGHT_M - LEG_HEIGHT_M)
-                        .translation(v3(0.0, 0.0, (LEG_HEIGHT_M + PERSON_HEIGHT_M) / 2.0)),
-                    Some(body),
-                );
-                w.body = body;
-                w
             })
             .collect();
         let half = [
@@ -158,48 +205,41 @@ impl Scene {
             0.0,
             GROUND_CLEARANCE_M + half[2],
         ];
-        let robot_shape = Cuboid::new(v3(half[0], half[1], half[2]));
-        let robot =
-            world.insert_body(RigidBodyBuilder::kinematic_position_based().pose(pose3(start, 0.0)));
-        world.insert_collider(
-            ColliderBuilder::cuboid(half[0] as Real, half[1] as Real, half[2] as Real)
-                .translation(v3(offset[0], offset[1], offset[2])),
-            Some(robot),
-        );
-        // One step puts every collider into the query structures.
+        // One step builds the query structures; nothing moves in them later.
         world.step();
-        Scene {
+        let mut scene = Scene {
             world,
-            robot,
-            robot_shape,
+            robot_shape: Cuboid::new(v3(half[0], half[1], half[2])),
             robot_shape_offset: offset,
             walkers,
+            bodies: Vec::new(),
+        };
+        scene.step_to(0.0);
+        scene
+    }
+
+    /// Moves the people to where they are at `t_s`.
+    pub fn step_to(&mut self, t_s: f64) {
+        self.bodies.clear();
+        for w in &self.walkers {
+            self.bodies.extend(w.body_at(t_s));
         }
     }
 
-    /// Moves the people to where they are at `t_s` and the robot to
-    /// `robot`, and steps the physics so that queries see them there.
-    pub fn step_to(&mut self, t_s: f64, robot: &Pose2, dt_s: f64) {
-        for w in &self.walkers {
-            let at = w.pose_at(t_s);
-            if let Some(b) = self.world.bodies.get_mut(w.body) {
-                b.set_next_kinematic_position(pose3(&at, 0.0));
-            }
-        }
-        if let Some(b) = self.world.bodies.get_mut(self.robot) {
-            b.set_next_kinematic_position(pose3(robot, 0.0));
-        }
-        self.world.integration_parameters.dt = dt_s as Real;
-        self.world.step();
+    /// The people's legs now: centres and radius.
+    pub fn legs(&self) -> impl Iterator<Item = (Point2<f64>, f64)> + '_ {
+        self.bodies
+            .iter()
+            .filter(|b| b.z[0] <= 0.0)
+            .map(|b| (b.at, b.radius))
     }
 
     /// True when the robot's footprint, moved from `from` to `to`, meets
     /// anything on the way or at the end.
     pub fn blocked(&self, from: &Pose2, to: &Pose2) -> bool {
-        let filter = QueryFilter::default().exclude_rigid_body(self.robot);
-        let q = self.world.query_pipeline_with_filter(filter);
+        let q = self.world.query_pipeline();
         let place = |p: &Pose2| {
-            let o = p.transform_point(&nalgebra::Point2::new(
+            let o = p.transform_point(&Point2::new(
                 self.robot_shape_offset[0],
                 self.robot_shape_offset[1],
             ));
@@ -214,10 +254,25 @@ impl Scene {
         };
         if q.cast_shape(&a, motion, &self.robot_shape, options)
             .is_some()
+            || q.intersect_shape(b, &self.robot_shape).next().is_some()
         {
             return true;
         }
-        q.intersect_shape(b, &self.robot_shape).next().is_some()
+        // People: their legs against the footprint at its end.
+        let (hx, hy) = (
+            f64::from(self.robot_shape.half_extents.x),
+            f64::from(self.robot_shape.half_extents.y),
+        );
+        let centre = to.transform_point(&Point2::new(
+            self.robot_shape_offset[0],
+            self.robot_shape_offset[1],
+        ));
+        let frame = Pose2::new(centre.x, centre.y, to.theta).inverse();
+        self.bodies.iter().any(|b| {
+            let p = frame.transform_point(&b.at);
+            let (dx, dy) = ((p.x.abs() - hx).max(0.0), (p.y.abs() - hy).max(0.0));
+            b.z[0] < self.robot_shape_offset[2] * 2.0 && dx * dx + dy * dy <= b.radius * b.radius
+        })
     }
 
     /// People's poses at `t_s`, for ground truth.

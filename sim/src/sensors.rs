@@ -1,7 +1,9 @@
 //! The scanning laser and the range camera, cast through rapier's query
 //! pipeline, and the faults a configuration can inject.
 
+use crate::plane::{PlaneCaster, ray_circle};
 use crate::scene::{GLASS, Scene};
+use nalgebra::{Point2, Vector2};
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Normal};
 use rapier3d::prelude::*;
@@ -84,12 +86,19 @@ fn v3(x: f64, y: f64, z: f64) -> Vector {
 }
 
 /// The first surface along a ray that returns the light: glass only near
-/// normal incidence. `None`: nothing within `max_m`.
+/// normal incidence; people where they are now. `None`: nothing within
+/// `max_m`.
 pub fn cast(scene: &Scene, origin: [f64; 3], dir: [f64; 3], max_m: f64) -> Option<f64> {
+    let person = scene
+        .bodies
+        .iter()
+        .filter_map(|b| b.cast(origin, dir))
+        .fold(f64::INFINITY, f64::min);
+    let max_m = max_m.min(person);
     let mut from = 0.0;
     let mut skip: Option<ColliderHandle> = None;
     for _ in 0..4 {
-        let mut filter = QueryFilter::default().exclude_rigid_body(scene.robot);
+        let mut filter = QueryFilter::default();
         if let Some(s) = skip {
             filter = filter.exclude_collider(s);
         }
@@ -100,7 +109,10 @@ pub fn cast(scene: &Scene, origin: [f64; 3], dir: [f64; 3], max_m: f64) -> Optio
             origin[2] + dir[2] * from,
         );
         let ray = Ray::new(o, v3(dir[0], dir[1], dir[2]));
-        let (handle, hit) = q.cast_ray_and_get_normal(&ray, (max_m - from) as Real, true)?;
+        let Some((handle, hit)) = q.cast_ray_and_get_normal(&ray, (max_m - from) as Real, true)
+        else {
+            return person.is_finite().then_some(person);
+        };
         let range = from + f64::from(hit.time_of_impact);
         let glass = scene
             .world
@@ -119,15 +131,20 @@ pub fn cast(scene: &Scene, origin: [f64; 3], dir: [f64; 3], max_m: f64) -> Optio
         from = range;
         skip = Some(handle);
     }
-    None
+    person.is_finite().then_some(person)
 }
 
-/// The laser: beams cast one by one at their own time during the sweep.
+/// The laser: beams cast one by one at their own time during the sweep,
+/// in the plane of its scan: the static world through a [`PlaneCaster`],
+/// the people's legs where they are.
 #[derive(Clone, Debug)]
 pub struct LaserRig {
+    plane: PlaneCaster,
+    legs: Vec<(Point2<f64>, f64)>,
+    /// Cosine and sine of each beam's bearing in the sensor frame.
+    bearings: Vec<[f64; 2]>,
     spec: LaserSpec,
     mount: Pose2,
-    height_m: f64,
     period_ns: i64,
     /// Start of the scan under way, ns.
     scan_start_ns: i64,
@@ -135,14 +152,22 @@ pub struct LaserRig {
 }
 
 impl LaserRig {
-    /// A laser of `spec` at `mount` on the robot, `height_m` above the floor.
-    pub fn new(spec: LaserSpec, mount: Pose2, height_m: f64) -> Self {
+    /// A laser of `spec` at `mount` on the robot, scanning the plane whose
+    /// static solids `plane` holds.
+    pub fn new(spec: LaserSpec, mount: Pose2, plane: PlaneCaster) -> Self {
         let period_ns = (1e9 / spec.rate_hz.max(1e-6)).round() as i64;
         LaserRig {
+            plane,
+            legs: Vec::new(),
+            bearings: (0..spec.beams)
+                .map(|i| {
+                    let (s, c) = spec.beam_angle(i).sin_cos();
+                    [c, s]
+                })
+                .collect(),
             ranges: Vec::with_capacity(spec.beams),
             spec,
             mount,
-            height_m,
             period_ns,
             scan_start_ns: 0,
         }
@@ -169,16 +194,42 @@ impl LaserRig {
     ) -> Vec<Scan> {
         let mut done = Vec::new();
         let noise = Normal::new(0.0, self.spec.range_sigma_m.max(1e-12)).ok();
+        self.legs.clear();
+        self.legs.extend(scene.legs());
+        // The sensor's pose at the step's start and its velocity in the
+        // world: within one physics step (10 ms) its arc is a straight line
+        // to within micrometres.
+        let start = *pose0 * self.mount;
+        let step_s = (t1_ns - t0_ns) as f64 * 1e-9;
+        let end = *pose0 * twist.displacement(step_s) * self.mount;
+        let (vx, vy, w) = (
+            (end.x - start.x) / step_s,
+            (end.y - start.y) / step_s,
+            twist.omega_radps,
+        );
+        let (s0, c0) = start.theta.sin_cos();
         loop {
             let i = self.ranges.len();
             let t = self.beam_time_ns(i);
             if t >= t1_ns {
                 break;
             }
-            let robot = *pose0 * twist.displacement((t - t0_ns) as f64 * 1e-9);
-            let sensor = robot * self.mount;
+            let tau = (t - t0_ns) as f64 * 1e-9;
+            let sensor = Pose2 {
+                x: start.x + vx * tau,
+                y: start.y + vy * tau,
+                theta: start.theta + w * tau,
+            };
             let phi = sensor.theta + self.spec.beam_angle(i);
-            let mut r = self.echo(scene, &sensor, phi);
+            // The beam's direction without a sine per beam: the beam's own
+            // bearing (tabled) turned by the sensor's heading at the step's
+            // start and by the few milliradians it turned since (series).
+            let x = w * tau;
+            let (sx, cx) = (x - x * x * x / 6.0, 1.0 - x * x / 2.0);
+            let [cb, sb] = self.bearings[i];
+            let (cs, ss) = (cb * cx - sb * sx, sb * cx + cb * sx);
+            let dir = Vector2::new(cs * c0 - ss * s0, ss * c0 + cs * s0);
+            let mut r = self.ray_dir(sensor.position(), dir);
             if let Some(prev) = self.ranges.last().copied() {
                 let edge = match (prev.is_finite(), r) {
                     (true, Some(x)) => (x - prev).abs() > SAME_SURFACE_M,
@@ -186,7 +237,7 @@ impl LaserRig {
                     _ => true,
                 };
                 if edge {
-                    r = self.footprint_echo(scene, &sensor, phi);
+                    r = self.footprint_echo(&sensor, phi);
                 }
             }
             let mut range = match r {
@@ -221,31 +272,35 @@ impl LaserRig {
         done
     }
 
-    fn echo(&self, scene: &Scene, sensor: &Pose2, phi: f64) -> Option<f64> {
-        cast(
-            scene,
-            [sensor.x, sensor.y, self.height_m],
-            [phi.cos(), phi.sin(), 0.0],
-            self.spec.max_range_m,
-        )
+    /// The nearest surface along a horizontal ray from `o` in direction `a`.
+    fn ray(&self, o: Point2<f64>, a: f64) -> Option<f64> {
+        self.ray_dir(o, Vector2::new(a.cos(), a.sin()))
+    }
+
+    /// The nearest surface along a horizontal ray from `o` along unit `d`.
+    fn ray_dir(&self, o: Point2<f64>, d: Vector2<f64>) -> Option<f64> {
+        let max = self.spec.max_range_m;
+        let fixed = self.plane.cast(&o, &d, max);
+        self.legs
+            .iter()
+            .filter_map(|(c, r)| ray_circle(&o, &d, c, *r))
+            .chain(fixed)
+            .filter(|&s| s < max)
+            .min_by(f64::total_cmp)
     }
 
     /// The echo of a beam whose footprint may straddle an edge: sub-rays
     /// across it, and the first surface that catches a third of them (a
     /// pulse laser reports the first strong echo), at their mean range.
-    fn footprint_echo(&self, scene: &Scene, sensor: &Pose2, phi: f64) -> Option<f64> {
+    fn footprint_echo(&self, sensor: &Pose2, phi: f64) -> Option<f64> {
         let w = &self.spec.beam_width;
         let mut hits: Vec<f64> = (0..SUB_RAYS)
             .filter_map(|s| {
                 let f = s as f64 / (SUB_RAYS - 1) as f64 - 0.5;
                 let a = phi + f * w.per_m;
                 let side = f * w.base_m;
-                let o = [
-                    sensor.x - phi.sin() * side,
-                    sensor.y + phi.cos() * side,
-                    self.height_m,
-                ];
-                cast(scene, o, [a.cos(), a.sin(), 0.0], self.spec.max_range_m)
+                let o = Point2::new(sensor.x - phi.sin() * side, sensor.y + phi.cos() * side);
+                self.ray(o, a)
             })
             .collect();
         hits.sort_by(f64::total_cmp);

@@ -3,6 +3,7 @@
 //! kept apart, in [`Simulator::truth`] and [`Simulator::layout`].
 
 use crate::layout::Layout;
+use crate::plane::PlaneCaster;
 use crate::scene::Scene;
 use crate::sensors::{CameraRig, CameraSpec, FaultConfig, LaserRig};
 use crate::vehicle::{Drive, DriveState, DynamicsConfig};
@@ -92,13 +93,13 @@ impl Simulator {
             world.robot.at[1],
             world.robot.heading_deg.to_radians(),
         );
-        let scene = Scene::build(&layout, &world.people, &config.vehicle, &start, &mut rng);
+        let scene = Scene::build(&layout, &world.people, &config.vehicle, &mut rng);
         let odometry_period_ns = (1e9 / config.vehicle.odometry_rate_hz.max(1e-6)).round() as i64;
         Simulator {
             laser: LaserRig::new(
                 config.laser.clone(),
                 config.vehicle.laser_mount,
-                config.vehicle.laser_height_m,
+                PlaneCaster::new(&layout, config.vehicle.laser_height_m),
             ),
             camera: config.camera.clone().map(CameraRig::new),
             drive: Drive::new(config.vehicle.clone(), config.dynamics.clone(), start),
@@ -138,6 +139,8 @@ impl Simulator {
         let dt = self.step_ns as f64 * 1e-9;
         let (t0, t1) = (self.now_ns, self.now_ns + self.step_ns);
         let before = self.drive.state().pose;
+        // The people where they are at the step's end.
+        self.scene.step_to(t1 as f64 * 1e-9);
         let next = self.drive.propose(&self.command, dt, &mut self.rng);
         self.bumper = self.scene.blocked(&before, &next.pose);
         if self.bumper {
@@ -148,7 +151,6 @@ impl Simulator {
         }
         let twist = self.drive.state().twist;
         let pose = self.drive.state().pose;
-        self.scene.step_to(t1 as f64 * 1e-9, &pose, dt);
         for scan in self.laser.sweep(
             &self.scene,
             t0,

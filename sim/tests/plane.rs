@@ -1,0 +1,55 @@
+//! The laser's plane caster holds the same geometry as the rapier world:
+//! horizontal rays at the laser's height from free space along each world's
+//! tour meet the same surface at the same range in both (within a
+//! millimetre: rapier casts in f32, and its cylinders by GJK).
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use nalgebra::{Point2, Vector2};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use stucco_core::VehicleSpec;
+use stucco_sim::{Layout, PlaneCaster, Scene, WorldSpec, cast};
+
+#[test]
+fn plane_caster_and_rapier_agree() {
+    let vehicle = VehicleSpec::default();
+    let h = vehicle.laser_height_m;
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut compared = 0;
+    for name in ["reference-room", "corridor", "apartment"] {
+        let path = format!("{}/worlds/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        let world = WorldSpec::load(std::path::Path::new(&path)).unwrap();
+        let layout = Layout::of(&world);
+        let scene = Scene::build(&layout, &world.people, &vehicle, &mut rng);
+        let plane = PlaneCaster::new(&layout, h);
+        let legs: Vec<_> = scene.legs().collect();
+        let n = world.tour.len();
+        for i in 0..n {
+            let (a, b) = (world.tour[i], world.tour[(i + 1) % n]);
+            for k in 0..20 {
+                let f = k as f64 / 20.0;
+                let o = Point2::new(a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]));
+                for _ in 0..10 {
+                    let phi = rng.random::<f64>() * std::f64::consts::TAU;
+                    let d = Vector2::new(phi.cos(), phi.sin());
+                    let fast = legs
+                        .iter()
+                        .filter_map(|(c, r)| stucco_sim::ray_circle(&o, &d, c, *r))
+                        .chain(plane.cast(&o, &d, 30.0))
+                        .min_by(f64::total_cmp);
+                    let full = cast(&scene, [o.x, o.y, h], [d.x, d.y, 0.0], 30.0);
+                    match (fast, full) {
+                        (Some(x), Some(y)) => assert!(
+                            (x - y).abs() < 1e-3,
+                            "{name}: from {o:?} at {phi}: plane {x}, rapier {y}"
+                        ),
+                        (None, None) => {}
+                        other => panic!("{name}: from {o:?} at {phi}: {other:?}"),
+                    }
+                    compared += 1;
+                }
+            }
+        }
+    }
+    assert!(compared >= 2000, "{compared}");
+}
