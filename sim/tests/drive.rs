@@ -46,6 +46,20 @@ fn same_world_seed_and_commands_give_identical_sensor_streams() {
     assert_ne!(a, trace(8, 6.0), "the seed must matter");
 }
 
+/// Monte-Carlo studies run simulations side by side: a simulator moves to
+/// a thread and gives there what it gives here.
+#[test]
+fn simulations_run_in_parallel_threads_alike() {
+    let here: Vec<String> = (0..3).map(|seed| trace(seed, 2.0)).collect();
+    let there: Vec<String> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3)
+            .map(|seed| s.spawn(move || trace(seed, 2.0)))
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert_eq!(here, there);
+}
+
 #[test]
 fn a_wall_stops_the_robot_and_the_bumper_says_so() {
     let w = world("reference-room");
