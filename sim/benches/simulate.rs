@@ -3,6 +3,7 @@
 //! camera 5 Hz, physics 100 Hz, four people walking), setup outside the
 //! timed loop. The real-time factor is 10 s over the median.
 //! `cargo bench -p stucco-sim --bench simulate -- --noplot`
+#![allow(clippy::expect_used)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;

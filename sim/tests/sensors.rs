@@ -80,7 +80,16 @@ fn the_camera_sees_through_a_window() {
     );
 }
 
-fn run(faults: FaultConfig, seconds: f64) -> (usize, Vec<(i64, i64)>, Vec<f64>, Vec<f64>) {
+/// What a run delivered: scans, encoder counts (left, right), each scan's
+/// lateness, and each scan's range straight ahead.
+struct Run {
+    scans: usize,
+    ticks: Vec<(i64, i64)>,
+    late_s: Vec<f64>,
+    ahead_m: Vec<f64>,
+}
+
+fn run(faults: FaultConfig, seconds: f64) -> Run {
     let w = world_at("reference-room", [1.5, 1.3], 0.0);
     let cfg = SimConfig {
         faults,
@@ -101,51 +110,64 @@ fn run(faults: FaultConfig, seconds: f64) -> (usize, Vec<(i64, i64)>, Vec<f64>, 
         scans += r.scans.len();
         ticks.extend(r.encoders.iter().map(|e| (e.left_ticks, e.right_ticks)));
     }
-    (scans, ticks, arrival, first)
+    Run {
+        scans,
+        ticks,
+        late_s: arrival,
+        ahead_m: first,
+    }
 }
 
 #[test]
 fn faults_reach_the_robot_as_configured() {
-    let (scans, ticks, arrival, ahead) = run(FaultConfig::default(), 2.0);
+    let Run {
+        scans,
+        ticks,
+        late_s: arrival,
+        ahead_m: ahead,
+    } = run(FaultConfig::default(), 2.0);
     assert_eq!(
         scans, 16,
         "8 Hz over 2 s: the last sweep, from 1.875 s, ends at 1.97 s"
     );
     assert!(arrival.iter().all(|&a| a < 0.11), "{arrival:?}");
     // Dropped scans.
-    let (none, ..) = run(
+    let none = run(
         FaultConfig {
             scan_drop_probability: 1.0,
             ..FaultConfig::default()
         },
         2.0,
-    );
+    )
+    .scans;
     assert_eq!(none, 0);
     // Delayed scans: each arrives 0.5 s after its stamp (plus the sweep).
-    let (_, _, late, _) = run(
+    let late = run(
         FaultConfig {
             scan_delay_s: 0.5,
             ..FaultConfig::default()
         },
         2.0,
-    );
+    )
+    .late_s;
     assert!(late.iter().all(|&a| (0.5..0.52).contains(&a)), "{late:?}");
     // Spurious echoes: every beam short of the surface (up to its noise),
     // and well short on average.
-    let (_, _, _, short) = run(
+    let short = run(
         FaultConfig {
             spurious_return_probability: 1.0,
             ..FaultConfig::default()
         },
         2.0,
-    );
+    )
+    .ahead_m;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     assert!(
         short.iter().zip(&ahead).all(|(s, t)| *s < t + 0.1) && mean(&short) < mean(&ahead) - 0.1,
         "{short:?} vs {ahead:?}"
     );
     // A stuck left encoder from 0.5 s to 1.5 s.
-    let (_, stuck, ..) = run(
+    let stuck = run(
         FaultConfig {
             stuck_encoder: Some(StuckEncoder {
                 wheel: 0,
@@ -155,7 +177,8 @@ fn faults_reach_the_robot_as_configured() {
             ..FaultConfig::default()
         },
         2.0,
-    );
+    )
+    .ticks;
     let (during, after) = (&stuck[30..70], &stuck[80..]);
     assert!(during.windows(2).all(|w| w[0].0 == w[1].0), "left froze");
     assert!(
