@@ -29,6 +29,28 @@ pub struct FaultConfig {
     pub scan_delay_s: f64,
     /// An encoder that stops counting for a while.
     pub stuck_encoder: Option<StuckEncoder>,
+    /// A drive motor that gives no traction for a while: the commanded
+    /// speed has no effect and the robot rolls to a stop.
+    pub stalled_drive: Option<Interval>,
+    /// A steering that holds its angle for a while, whatever is commanded.
+    pub stuck_steering: Option<Interval>,
+}
+
+/// A stretch of simulated time, `[from_s, until_s)`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Interval {
+    /// Start, s.
+    pub from_s: f64,
+    /// End, s.
+    pub until_s: f64,
+}
+
+impl Interval {
+    /// True when `t_s` falls in it.
+    pub fn contains(&self, t_s: f64) -> bool {
+        (self.from_s..self.until_s).contains(&t_s)
+    }
 }
 
 /// An encoder wheel whose counter freezes from `from_s` to `until_s`.

@@ -6,7 +6,7 @@ use crate::layout::Layout;
 use crate::plane::PlaneCaster;
 use crate::scene::Scene;
 use crate::sensors::{CameraRig, CameraSpec, FaultConfig, LaserRig};
-use crate::vehicle::{Drive, DriveState, DynamicsConfig};
+use crate::vehicle::{ActuatorFaults, Drive, DriveState, DynamicsConfig};
 use crate::world::WorldSpec;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -141,7 +141,12 @@ impl Simulator {
         let before = self.drive.state().pose;
         // The people where they are at the step's end.
         self.scene.step_to(t1 as f64 * 1e-9);
-        let next = self.drive.propose(&self.command, dt, &mut self.rng);
+        let t = t0 as f64 * 1e-9;
+        let faults = ActuatorFaults {
+            stalled: self.faults.stalled_drive.is_some_and(|i| i.contains(t)),
+            steering_stuck: self.faults.stuck_steering.is_some_and(|i| i.contains(t)),
+        };
+        let next = self.drive.propose(&self.command, dt, faults, &mut self.rng);
         self.bumper = self.scene.blocked(&before, &next.pose);
         if self.bumper {
             self.drive.halt();

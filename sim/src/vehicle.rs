@@ -47,6 +47,15 @@ impl Default for DynamicsConfig {
     }
 }
 
+/// Actuators failing during one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ActuatorFaults {
+    /// The drive motor gives no traction.
+    pub stalled: bool,
+    /// The steering holds its angle.
+    pub steering_stuck: bool,
+}
+
 /// The true state of the drive.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct DriveState {
@@ -93,9 +102,24 @@ impl Drive {
     }
 
     /// The pose the drive reaches after `dt_s` of following `cmd` within
-    /// its limits, and the twist it moves with; nothing is committed.
-    pub fn propose(&self, cmd: &DriveCommand, dt_s: f64, rng: &mut impl Rng) -> DriveState {
+    /// its limits, with its actuators failing as `faults` says, and the
+    /// twist it moves with; nothing is committed.
+    pub fn propose(
+        &self,
+        cmd: &DriveCommand,
+        dt_s: f64,
+        faults: ActuatorFaults,
+        rng: &mut impl Rng,
+    ) -> DriveState {
         let s = &self.spec;
+        let cmd = DriveCommand {
+            speed_mps: if faults.stalled { 0.0 } else { cmd.speed_mps },
+            steer_rad: if faults.steering_stuck {
+                self.state.steer_rad
+            } else {
+                cmd.steer_rad
+            },
+        };
         let steer_goal = cmd.steer_rad.clamp(-s.max_steer_rad, s.max_steer_rad);
         let max_turn = s.max_steer_rate_radps * dt_s;
         let steer =
@@ -199,7 +223,7 @@ mod tests {
     fn run(drive: &mut Drive, cmd: DriveCommand, seconds: f64) {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         for _ in 0..(seconds * 100.0).round() as usize {
-            let next = drive.propose(&cmd, 0.01, &mut rng);
+            let next = drive.propose(&cmd, 0.01, ActuatorFaults::default(), &mut rng);
             drive.commit(next, 0.01, &mut rng);
         }
     }
@@ -212,7 +236,7 @@ mod tests {
             steer_rad: 3.0,
         };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let next = d.propose(&cmd, 0.1, &mut rng);
+        let next = d.propose(&cmd, 0.1, ActuatorFaults::default(), &mut rng);
         assert!((next.wheel_speed_mps - 0.08).abs() < 1e-12); // 0.8 m/s² · 0.1 s
         assert!((next.steer_rad - 0.2).abs() < 1e-12); // 2 rad/s · 0.1 s
         run(&mut d, cmd, 5.0);

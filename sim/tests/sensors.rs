@@ -4,7 +4,7 @@
 
 use std::path::Path;
 use stucco_core::{DriveCommand, Platform, RangeProfile};
-use stucco_sim::{FaultConfig, SimConfig, Simulator, StuckEncoder, WorldSpec};
+use stucco_sim::{FaultConfig, Interval, SimConfig, Simulator, StuckEncoder, WorldSpec};
 
 fn world_at(name: &str, at: [f64; 2], heading_deg: f64) -> WorldSpec {
     let path = format!("{}/worlds/{name}.toml", env!("CARGO_MANIFEST_DIR"));
@@ -206,4 +206,47 @@ fn glass_returns_only_near_normal_incidence() {
     );
     let slanted = at_elevation(&p, 0.35); // 20° off the pane's normal
     assert!(slanted > 3.0, "the beam passes the glass: {slanted}");
+}
+
+#[test]
+fn a_stalled_drive_rolls_to_a_stop_and_a_stuck_steering_holds() {
+    let w = world_at("reference-room", [1.5, 1.3], 0.0);
+    let faults = FaultConfig {
+        stalled_drive: Some(Interval {
+            from_s: 1.0,
+            until_s: 2.0,
+        }),
+        stuck_steering: Some(Interval {
+            from_s: 0.0,
+            until_s: 3.0,
+        }),
+        ..FaultConfig::default()
+    };
+    let mut sim = Simulator::new(
+        &w,
+        SimConfig {
+            faults,
+            ..SimConfig::default()
+        },
+        Some(2),
+    );
+    sim.command(DriveCommand {
+        speed_mps: 0.3,
+        steer_rad: 0.5,
+    });
+    sim.advance(1.0);
+    let moving = sim.truth().drive;
+    assert!(
+        moving.wheel_speed_mps > 0.29 && moving.steer_rad == 0.0,
+        "{moving:?}"
+    );
+    sim.advance(0.9);
+    let stalled = sim.truth().drive;
+    assert!(stalled.wheel_speed_mps.abs() < 1e-9, "{stalled:?}");
+    sim.advance(1.5);
+    let after = sim.truth().drive;
+    assert!(
+        after.steer_rad > 0.4 && after.wheel_speed_mps > 0.29,
+        "{after:?}"
+    );
 }
