@@ -196,3 +196,50 @@ fn simulated_scans_give_the_room_walls_and_the_door() {
         "the door in only {seen_door} scans"
     );
 }
+
+/// Dead reckoning of the navigation core on the simulator's encoders: with
+/// true wheel radii and no slip it follows the true pose to the encoder
+/// resolution; with the default errors it drifts, as odometry does.
+#[test]
+fn dead_reckoning_on_simulated_encoders_follows_the_truth() {
+    use stucco_nav::{DeadReckoning, OdometryConfig};
+    use stucco_sim::DynamicsConfig;
+    let w = world("reference-room");
+    let drift = |dynamics: DynamicsConfig| {
+        let cfg = SimConfig {
+            dynamics,
+            ..SimConfig::default()
+        };
+        let vehicle = cfg.vehicle.clone();
+        let mut sim = Simulator::new(&w, cfg, Some(5));
+        let start = sim.truth().drive.pose;
+        let mut dr = DeadReckoning::new(OdometryConfig::for_vehicle(&vehicle));
+        let mut driver = TourDriver::new(w.tour.clone(), 0.5);
+        let mut worst: f64 = 0.0;
+        for _ in 0..1500 {
+            let pose = sim.truth().drive.pose;
+            sim.command(driver.command(&pose, &vehicle));
+            for e in sim.advance(0.02).encoders {
+                dr.update(&e);
+            }
+            let est = start * dr.total().pose;
+            let truth = sim.truth().drive.pose;
+            worst = worst.max((est.position() - truth.position()).norm());
+        }
+        worst
+    };
+    let exact = drift(DynamicsConfig {
+        drive_slip: 0.0,
+        creep_sigma: 0.0,
+        wheel_radius_error: [0.0, 0.0],
+        ..DynamicsConfig::default()
+    });
+    let real = drift(DynamicsConfig::default());
+    println!(
+        "30 s tour: worst dead-reckoning error {:.1} mm exact, {:.1} mm with errors",
+        exact * 1e3,
+        real * 1e3
+    );
+    assert!(exact < 0.01, "{exact}");
+    assert!(real > exact && real < 0.5, "{real}");
+}

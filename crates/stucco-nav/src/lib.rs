@@ -12,6 +12,8 @@
 //! - [`RoomSearch`]: the four walls of a rectangular room as one group of
 //!   peaks 90° apart, and the room's orientation.
 //! - [`find_doors`]: open doors as runs of beams beyond a wall.
+//! - [`DeadReckoning`]: the tricycle's pose from its rear-wheel encoders,
+//!   as a [`Displacement`] with covariance since the last scan.
 //! - [`synthetic`]: exact ray-cast scans of rooms with clutter, for tests.
 //!
 //! ```
@@ -37,6 +39,7 @@ mod error;
 mod extractor;
 mod hough;
 mod line_fit;
+mod odometry;
 mod points;
 mod ransac;
 mod room;
@@ -49,6 +52,7 @@ pub use error::NavError;
 pub use extractor::WallExtractor;
 pub use hough::{HoughConfig, HoughTransform, Weighting};
 pub use line_fit::FitConfig;
+pub use odometry::{DeadReckoning, Displacement, OdometryConfig};
 pub use points::{ScanPoint, ScanPoints};
 pub use ransac::{RansacConfig, RansacExtractor};
 pub use room::{RectangularRoom, RoomConfig, RoomSearch};
