@@ -14,6 +14,8 @@
 //! - [`find_doors`]: open doors as runs of beams beyond a wall.
 //! - [`DeadReckoning`]: the tricycle's pose from its rear-wheel encoders,
 //!   as a [`Displacement`] with covariance since the last scan.
+//! - [`RoomEkf`]: the robot's pose and the room's size in an EKF fed by the
+//!   encoders and by walls, each scan applied at its own stamp.
 //! - [`synthetic`]: exact ray-cast scans of rooms with clutter, for tests.
 //!
 //! ```
@@ -43,6 +45,7 @@ mod odometry;
 mod points;
 mod ransac;
 mod room;
+mod room_ekf;
 mod rwht;
 pub mod synthetic;
 mod wall;
@@ -56,5 +59,8 @@ pub use odometry::{DeadReckoning, Displacement, OdometryConfig};
 pub use points::{ScanPoint, ScanPoints};
 pub use ransac::{RansacConfig, RansacExtractor};
 pub use room::{RectangularRoom, RoomConfig, RoomSearch};
+pub use room_ekf::{
+    RoomCovariance, RoomEkf, RoomEkfConfig, RoomState, ScanUpdate, observe, predict,
+};
 pub use rwht::{RwhtConfig, RwhtExtractor};
 pub use wall::Wall;

@@ -1,0 +1,372 @@
+//! The room filter of paper A §3: an extended Kalman filter of the robot's
+//! pose in a rectangular room and of the room's size, fed by dead
+//! reckoning and by the walls the laser sees, with the delayed-measurement
+//! scheme of eq. 8.
+//!
+//! The room frame has its origin in a corner and its walls on the lines
+//! `x = 0`, `y = 0`, `x = xs`, `y = ys`. The state is
+//! `(x, y, θ, xs, ys)`: the rear axle's pose and the room's size.
+//!
+//! A scan is applied at its own stamp: the filter holds its estimate at the
+//! last scan's stamp and the encoder samples that came since; a new scan's
+//! stamp splits them into the part before it (predicted through, then the
+//! update) and the part after (re-predicted to "now" when asked). How long
+//! the extraction took — how late the scan is handed in — never changes
+//! the estimate.
+
+use crate::odometry::{Displacement, OdometryConfig};
+use crate::wall::Wall;
+use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2};
+use serde::Serialize;
+use std::f64::consts::{FRAC_PI_2, PI};
+use stucco_core::{EncoderSample, Pose2, Stamp, wrap_angle};
+
+/// The filter's state vector.
+pub type RoomState = SVector<f64, 5>;
+/// Its covariance.
+pub type RoomCovariance = SMatrix<f64, 5, 5>;
+
+/// Settings of the room filter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoomEkfConfig {
+    /// The odometry.
+    pub odometry: OdometryConfig,
+    /// Where the laser sits on the robot.
+    pub laser_mount: Pose2,
+    /// Innovation gate: a wall whose squared Mahalanobis distance to its
+    /// prediction exceeds this is rejected (χ², 2 degrees of freedom;
+    /// 13.8 ≈ 99.9%).
+    pub gate_chi2: f64,
+    /// Floor on a wall observation's variance: `(d, γ)`, m², rad².
+    pub min_wall_variance: [f64; 2],
+}
+
+impl RoomEkfConfig {
+    /// The filter for a robot with `odometry` and its laser at `mount`.
+    pub fn new(odometry: OdometryConfig, laser_mount: Pose2) -> Self {
+        RoomEkfConfig {
+            odometry,
+            laser_mount,
+            gate_chi2: 13.8,
+            min_wall_variance: [1e-6, 1e-7],
+        }
+    }
+}
+
+/// What one scan did to the filter.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ScanUpdate {
+    /// Walls used, by room wall (0: x = 0, 1: y = 0, 2: x = xs, 3: y = ys).
+    pub used: Vec<usize>,
+    /// Walls rejected by the innovation gate.
+    pub rejected: usize,
+}
+
+/// An observed wall paired with a room wall: which, its squared
+/// Mahalanobis distance, innovation, Jacobian and inverse innovation
+/// covariance.
+struct Match {
+    wall: usize,
+    m2: f64,
+    nu: Vector2<f64>,
+    h: SMatrix<f64, 2, 5>,
+    s_inv: Matrix2<f64>,
+}
+
+/// The room filter with its delayed-measurement bookkeeping.
+#[derive(Clone, Debug)]
+pub struct RoomEkf {
+    config: RoomEkfConfig,
+    /// The estimate at `at` (the last scan's stamp, or the start).
+    x: RoomState,
+    p: RoomCovariance,
+    at: Stamp,
+    /// The encoder sample the estimate's pose corresponds to.
+    anchor: Option<EncoderSample>,
+    /// Encoder samples since `anchor`, oldest first.
+    pending: Vec<EncoderSample>,
+}
+
+impl RoomEkf {
+    /// A filter starting from `x0` with covariance `p0` at `at`.
+    pub fn new(config: RoomEkfConfig, x0: RoomState, p0: RoomCovariance, at: Stamp) -> Self {
+        RoomEkf {
+            config,
+            x: x0,
+            p: p0,
+            at,
+            anchor: None,
+            pending: Vec::new(),
+        }
+    }
+
+    /// The estimate at the last scan, and when that was.
+    pub fn at_last_scan(&self) -> (&RoomState, &RoomCovariance, Stamp) {
+        (&self.x, &self.p, self.at)
+    }
+
+    /// Takes an encoder sample (dead reckoning runs at the encoders' rate).
+    pub fn odometry(&mut self, sample: EncoderSample) {
+        if self.anchor.is_none() {
+            self.anchor = Some(sample);
+            return;
+        }
+        self.pending.push(sample);
+    }
+
+    /// The estimate now: the last scan's estimate re-predicted with the
+    /// displacement accumulated since (eq. 8).
+    pub fn now(&self) -> (RoomState, RoomCovariance) {
+        let d = self.displacement(self.pending.len(), None);
+        predict(&self.x, &self.p, &d)
+    }
+
+    /// The displacement from the anchor through the first `n` pending
+    /// samples, and on to `until` by constant velocity over the next one.
+    fn displacement(&self, n: usize, until: Option<Stamp>) -> Displacement {
+        let cfg = &self.config.odometry;
+        let Some(mut prev) = self.anchor else {
+            return Displacement::zero(self.at);
+        };
+        let mut d = Displacement::zero(prev.stamp);
+        let per_tick =
+            |w: usize| std::f64::consts::TAU * cfg.wheel_radius_m[w] / f64::from(cfg.ticks_per_rev);
+        let wheels = |a: &EncoderSample, b: &EncoderSample| {
+            [
+                (b.left_ticks - a.left_ticks) as f64 * per_tick(0),
+                (b.right_ticks - a.right_ticks) as f64 * per_tick(1),
+            ]
+        };
+        for s in &self.pending[..n] {
+            d.extend(wheels(&prev, s), s.stamp, cfg);
+            prev = *s;
+        }
+        if let (Some(t), Some(next)) = (until, self.pending.get(n)) {
+            let span = next.stamp.seconds_since(prev.stamp);
+            if span > 0.0 {
+                let f = (t.seconds_since(prev.stamp) / span).clamp(0.0, 1.0);
+                let w = wheels(&prev, next);
+                d.extend([w[0] * f, w[1] * f], t, cfg);
+            }
+        }
+        d
+    }
+
+    /// Applies the walls seen in a scan stamped `stamp` (its first beam),
+    /// given in the laser's frame: predicts the last estimate through the
+    /// odometry up to `stamp`, associates each wall with the room wall it
+    /// predicts nearest (within the gate), and updates. The samples after
+    /// `stamp` stay pending for [`RoomEkf::now`].
+    pub fn scan(&mut self, stamp: Stamp, walls: &[Wall]) -> ScanUpdate {
+        let n = self.pending.iter().take_while(|s| s.stamp <= stamp).count();
+        let d = self.displacement(n, Some(stamp));
+        let (mut x, mut p) = predict(&self.x, &self.p, &d);
+        let mut report = ScanUpdate::default();
+        for wall in walls {
+            let mut best: Option<Match> = None;
+            for q in 0..4 {
+                let (z_hat, h) = observe(&x, q, &self.config.laser_mount);
+                let r = wall.covariance
+                    + Matrix2::from_diagonal(&Vector2::from(self.config.min_wall_variance));
+                let s = h * p * h.transpose() + r;
+                let Some(s_inv) = s.try_inverse() else {
+                    continue;
+                };
+                let nu = Vector2::new(wall.d_m - z_hat.x, wrap_angle(wall.gamma_rad - z_hat.y));
+                let m2 = (nu.transpose() * s_inv * nu)[(0, 0)];
+                if best.as_ref().is_none_or(|b| m2 < b.m2) {
+                    best = Some(Match {
+                        wall: q,
+                        m2,
+                        nu,
+                        h,
+                        s_inv,
+                    });
+                }
+            }
+            let Some(Match {
+                wall: q,
+                m2,
+                nu,
+                h,
+                s_inv,
+            }) = best
+            else {
+                continue;
+            };
+            if m2 > self.config.gate_chi2 {
+                report.rejected += 1;
+                continue;
+            }
+            let k = p * h.transpose() * s_inv;
+            x += k * nu;
+            x[2] = wrap_angle(x[2]);
+            // Joseph form keeps P symmetric and positive.
+            let i_kh = RoomCovariance::identity() - k * h;
+            let r = wall.covariance
+                + Matrix2::from_diagonal(&Vector2::from(self.config.min_wall_variance));
+            p = i_kh * p * i_kh.transpose() + k * r * k.transpose();
+            p = 0.5 * (p + p.transpose());
+            report.used.push(q);
+        }
+        // The scan's stamp is the new reference: the odometry from the
+        // anchor to it is spent.
+        self.x = x;
+        self.p = p;
+        self.at = stamp;
+        let rest = self.pending.split_off(n);
+        let anchor_at_stamp = self.pending.last().copied().or(self.anchor);
+        // A sample at the stamp itself anchors exactly; otherwise the next
+        // sample's travel is split at the stamp.
+        if let Some(next) = rest.first().copied() {
+            if let Some(a) = anchor_at_stamp {
+                let span = next.stamp.seconds_since(a.stamp);
+                let f = if span > 0.0 {
+                    (stamp.seconds_since(a.stamp) / span).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                // The anchor's counters are placed where the wheels were at
+                // the stamp (fractional ticks are rounded; the remainder is
+                // below one tick).
+                self.anchor = Some(EncoderSample {
+                    stamp,
+                    left_ticks: a.left_ticks
+                        + ((next.left_ticks - a.left_ticks) as f64 * f).round() as i64,
+                    right_ticks: a.right_ticks
+                        + ((next.right_ticks - a.right_ticks) as f64 * f).round() as i64,
+                });
+            }
+        } else {
+            self.anchor = anchor_at_stamp;
+        }
+        self.pending = rest;
+        report
+    }
+}
+
+/// The state moved by a displacement (eq. 5) and its covariance (eq. 6–7):
+/// the pose composed, the room unchanged.
+pub fn predict(x: &RoomState, p: &RoomCovariance, d: &Displacement) -> (RoomState, RoomCovariance) {
+    let th = x[2];
+    let (s, c) = th.sin_cos();
+    let dp = d.pose;
+    let mut out = *x;
+    out[0] += c * dp.x - s * dp.y;
+    out[1] += s * dp.x + c * dp.y;
+    out[2] = wrap_angle(th + dp.theta);
+    let mut f = RoomCovariance::identity();
+    f[(0, 2)] = -s * dp.x - c * dp.y;
+    f[(1, 2)] = c * dp.x - s * dp.y;
+    let rot = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    let q = rot * d.covariance * rot.transpose();
+    let mut out_p = f * p * f.transpose();
+    for i in 0..3 {
+        for j in 0..3 {
+            out_p[(i, j)] += q[(i, j)];
+        }
+    }
+    (out, 0.5 * (out_p + out_p.transpose()))
+}
+
+/// The predicted observation `(d, γ)` of room wall `q` from the laser at
+/// `mount` on a robot in state `x`, and its Jacobian.
+pub fn observe(x: &RoomState, q: usize, mount: &Pose2) -> (Vector2<f64>, SMatrix<f64, 2, 5>) {
+    let (s, c) = x[2].sin_cos();
+    let lx = x[0] + c * mount.x - s * mount.y;
+    let ly = x[1] + s * mount.x + c * mount.y;
+    let lth = x[2] + mount.theta;
+    // ∂(lx, ly)/∂θ.
+    let dlx = -s * mount.x - c * mount.y;
+    let dly = c * mount.x - s * mount.y;
+    let mut h = SMatrix::<f64, 2, 5>::zeros();
+    h[(1, 2)] = -1.0;
+    let (d, normal) = match q {
+        0 => {
+            h[(0, 0)] = 1.0;
+            h[(0, 2)] = dlx;
+            (lx, PI)
+        }
+        1 => {
+            h[(0, 1)] = 1.0;
+            h[(0, 2)] = dly;
+            (ly, -FRAC_PI_2)
+        }
+        2 => {
+            h[(0, 0)] = -1.0;
+            h[(0, 2)] = -dlx;
+            h[(0, 3)] = 1.0;
+            (x[3] - lx, 0.0)
+        }
+        _ => {
+            h[(0, 1)] = -1.0;
+            h[(0, 2)] = -dly;
+            h[(0, 4)] = 1.0;
+            (x[4] - ly, FRAC_PI_2)
+        }
+    };
+    (Vector2::new(d, wrap_angle(normal - lth)), h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Point2;
+
+    fn wall(d: f64, g: f64) -> Wall {
+        Wall {
+            d_m: d,
+            gamma_rad: g,
+            covariance: Matrix2::new(1e-5, 0.0, 0.0, 1e-6),
+            points: 50,
+            rms_residual_m: 0.01,
+            ends: [Point2::origin(), Point2::origin()],
+        }
+    }
+
+    #[test]
+    fn observation_jacobian_matches_finite_differences() {
+        let x = RoomState::new(1.2, 2.3, 0.4, 5.45, 5.64);
+        let mount = Pose2::new(0.35, 0.05, 0.02);
+        for q in 0..4 {
+            let (z, h) = observe(&x, q, &mount);
+            for i in 0..5 {
+                let mut dx = x;
+                dx[i] += 1e-7;
+                let (z2, _) = observe(&dx, q, &mount);
+                let num = (z2 - z) / 1e-7;
+                assert!((num.x - h[(0, i)]).abs() < 1e-5, "q{q} i{i}");
+                assert!((wrap_angle(num.y * 1e-7) / 1e-7 - h[(1, i)]).abs() < 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn walls_seen_from_the_true_pose_pull_a_wrong_estimate_to_it() {
+        let truth = RoomState::new(2.0, 1.5, 0.3, 5.45, 5.64);
+        let mount = Pose2::new(0.35, 0.0, 0.0);
+        let cfg = RoomEkfConfig::new(OdometryConfig::default(), mount);
+        let x0 = RoomState::new(2.05, 1.45, 0.32, 5.3, 5.8);
+        let p0 =
+            RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(0.01, 0.01, 0.004, 0.1, 0.1));
+        let mut ekf = RoomEkf::new(cfg, x0, p0, Stamp::ZERO);
+        let walls: Vec<Wall> = (0..4)
+            .map(|q| {
+                let (z, _) = observe(&truth, q, &mount);
+                wall(z.x, z.y)
+            })
+            .collect();
+        for k in 0..5 {
+            let r = ekf.scan(Stamp::from_secs_f64(k as f64 * 0.125), &walls);
+            assert_eq!(r.used.len(), 4, "{r:?}");
+        }
+        let (x, p, _) = ekf.at_last_scan();
+        assert!((x - truth).norm() < 1e-3, "{x}");
+        assert!((p - p.transpose()).norm() < 1e-15);
+        assert!(p.symmetric_eigenvalues().iter().all(|&e| e > 0.0));
+        // A person 1 m in front of the far wall is gated out.
+        let person = wall(walls[2].d_m - 1.0, walls[2].gamma_rad);
+        let r = ekf.scan(Stamp::from_secs_f64(1.0), &[person]);
+        assert_eq!((r.used.len(), r.rejected), (0, 1));
+    }
+}
