@@ -7,40 +7,16 @@
 //! The default run does 4 runs per condition; the 20-run study is ignored:
 //! `cargo test --release -p stucco-acceptance --test integration door_passage_table_iii -- --ignored --nocapture`.
 
-use nalgebra::SVector;
+use crate::closed_loop::Navigator;
 use std::path::Path;
-use stucco_control::{GainSchedule, Limiter, LineFollower};
-use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, Twist2};
-use stucco_nav::{
-    OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch, RoomState,
-    ScanPoints, Wall,
-};
-use stucco_sim::{SimConfig, Simulator, WorldSpec};
+use stucco_control::{GainSchedule, LineFollower};
+use stucco_core::Pose2;
+use stucco_nav::RoomState;
+use stucco_sim::WorldSpec;
 
 /// The door: in the wall x = 5.45, from y = 2.1 to 3.0.
 const DOOR_X: f64 = 5.45;
 const DOOR_Y: f64 = 2.55;
-
-/// The laser's own velocity from the encoder samples around `t`.
-fn laser_twist(samples: &[EncoderSample], t: Stamp, odo: &OdometryConfig, mount: &Pose2) -> Twist2 {
-    let i = samples
-        .partition_point(|s| s.stamp <= t)
-        .clamp(1, samples.len().max(2) - 1);
-    if samples.len() < 2 {
-        return Twist2::default();
-    }
-    let (a, b) = (samples[i - 1], samples[i]);
-    let dt = b.stamp.seconds_since(a.stamp).max(1e-6);
-    let per_tick = std::f64::consts::TAU * odo.wheel_radius_m[0] / f64::from(odo.ticks_per_rev);
-    let (dl, dr) = (
-        (b.left_ticks - a.left_ticks) as f64 * per_tick,
-        (b.right_ticks - a.right_ticks) as f64 * per_tick,
-    );
-    let (v, w) = ((dl + dr) / 2.0 / dt, (dr - dl) / odo.track_m / dt);
-    let (vx, vy) = (v - w * mount.y, w * mount.x);
-    let (s, c) = mount.theta.sin_cos();
-    Twist2::new(c * vx + s * vy, -s * vx + c * vy, w)
-}
 
 /// One passage: the lateral offset (m) and heading (rad) of the rear axle
 /// as it crosses the door plane, from the truth.
@@ -65,10 +41,6 @@ fn passage(start: Pose2, speed: f64, seed: u64) -> (f64, f64) {
             .fold((f64::MAX, f64::MIN), |(a, b), q| (a.min(q[1]), b.max(q[1])));
         x1 < DOOR_X - 3.6 || x0 > DOOR_X + 1.6 || y1 < DOOR_Y - 0.75 || y0 > DOOR_Y + 0.75
     });
-    let cfg = SimConfig::default();
-    let vehicle = cfg.vehicle.clone();
-    let mut sim = Simulator::new(&world, cfg, Some(seed));
-    let odo = OdometryConfig::for_vehicle(&vehicle);
     // The filter starts near the truth (a few cm, a degree) and learns the
     // room's size.
     let x0 = RoomState::new(
@@ -78,45 +50,12 @@ fn passage(start: Pose2, speed: f64, seed: u64) -> (f64, f64) {
         5.35,
         5.75,
     );
-    let p0 = RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(4e-4, 4e-4, 2e-4, 0.04, 0.04));
-    let mut ekf = RoomEkf::new(
-        RoomEkfConfig::new(odo.clone(), vehicle.laser_mount),
-        x0,
-        p0,
-        Stamp::ZERO,
-    );
-    let mut search = RoomSearch::new(RoomConfig::default()).unwrap();
+    let mut nav = Navigator::new(&world, seed, x0, [0.2, 0.2]);
     let law = LineFollower::new(GainSchedule::default());
-    let mut limiter = Limiter::new(&vehicle);
-    let mut samples: Vec<EncoderSample> = Vec::new();
-    let mut before = sim.truth().drive.pose;
+    let mut before = nav.truth();
     for _ in 0..3000 {
-        let (x, _) = ekf.now();
-        let steer = law.steer(x[1] - DOOR_Y, x[2], speed);
-        let cmd = limiter.limit(
-            DriveCommand {
-                speed_mps: speed,
-                steer_rad: steer,
-            },
-            0.02,
-        );
-        sim.command(cmd);
-        let r = sim.advance(0.02);
-        for e in &r.encoders {
-            ekf.odometry(*e);
-            samples.push(*e);
-        }
-        for scan in &r.scans {
-            let twist = laser_twist(&samples, scan.stamp, &odo, &vehicle.laser_mount);
-            let pts = ScanPoints::from_scan_deskewed(scan, &twist);
-            let walls: Vec<Wall> = search
-                .find(&pts)
-                .map(|room| room.walls.into_iter().flatten().collect())
-                .unwrap_or_default();
-            ekf.scan(scan.stamp, &walls);
-        }
-        let now = sim.truth().drive.pose;
-        assert!(!sim.truth().bumper, "bumped at {now:?}");
+        let x = nav.estimate();
+        let now = nav.step(speed, law.steer(x[1] - DOOR_Y, x[2], speed));
         if now.x >= DOOR_X {
             // Interpolate the crossing between the last two steps.
             let f = (DOOR_X - before.x) / (now.x - before.x);

@@ -1,0 +1,122 @@
+//! The robot's loop in the simulator, as the experiments close it: the
+//! encoders and the room search's walls feed the room filter, a law's
+//! command goes through the vehicle's limits, the truth stays aside.
+
+use nalgebra::SVector;
+use stucco_control::Limiter;
+use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, Twist2};
+use stucco_nav::{
+    OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch, RoomState,
+    ScanPoints, Wall,
+};
+use stucco_sim::{SimConfig, Simulator, WorldSpec};
+
+/// Control period, s.
+pub const DT_S: f64 = 0.02;
+
+/// A simulated robot navigating a rectangular room with the room filter.
+pub struct Navigator {
+    sim: Simulator,
+    ekf: RoomEkf,
+    search: RoomSearch,
+    limiter: Limiter,
+    odometry: OdometryConfig,
+    mount: Pose2,
+    samples: Vec<EncoderSample>,
+}
+
+impl Navigator {
+    /// The robot of `world` with `seed`, its filter starting at `x0` with
+    /// a few centimetres and a degree of uncertainty on the pose and
+    /// `size_sigma_m` on the room's size.
+    pub fn new(world: &WorldSpec, seed: u64, x0: RoomState, size_sigma_m: [f64; 2]) -> Self {
+        let cfg = SimConfig::default();
+        let vehicle = cfg.vehicle.clone();
+        let odometry = OdometryConfig::for_vehicle(&vehicle);
+        let p0 = RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(
+            4e-4,
+            4e-4,
+            2e-4,
+            size_sigma_m[0].powi(2),
+            size_sigma_m[1].powi(2),
+        ));
+        Navigator {
+            sim: Simulator::new(world, cfg, Some(seed)),
+            ekf: RoomEkf::new(
+                RoomEkfConfig::new(odometry.clone(), vehicle.laser_mount),
+                x0,
+                p0,
+                Stamp::ZERO,
+            ),
+            search: RoomSearch::new(RoomConfig::default()).expect("valid room settings"),
+            limiter: Limiter::new(&vehicle),
+            odometry,
+            mount: vehicle.laser_mount,
+            samples: Vec::new(),
+        }
+    }
+
+    /// The filter's estimate now.
+    pub fn estimate(&self) -> RoomState {
+        self.ekf.now().0
+    }
+
+    /// The true pose (for scoring only).
+    pub fn truth(&self) -> Pose2 {
+        self.sim.truth().drive.pose
+    }
+
+    /// One control period at `speed_mps` with steering `steer_rad`;
+    /// returns the true pose after it. Panics if the robot touched
+    /// anything: an experiment's lane is kept clear.
+    pub fn step(&mut self, speed_mps: f64, steer_rad: f64) -> Pose2 {
+        let cmd = self.limiter.limit(
+            DriveCommand {
+                speed_mps,
+                steer_rad,
+            },
+            DT_S,
+        );
+        self.sim.command(cmd);
+        let r = self.sim.advance(DT_S);
+        for e in &r.encoders {
+            self.ekf.odometry(*e);
+            self.samples.push(*e);
+        }
+        for scan in &r.scans {
+            let twist = self.laser_twist(scan.stamp);
+            let pts = ScanPoints::from_scan_deskewed(scan, &twist);
+            let walls: Vec<Wall> = self
+                .search
+                .find(&pts)
+                .map(|room| room.walls.into_iter().flatten().collect())
+                .unwrap_or_default();
+            self.ekf.scan(scan.stamp, &walls);
+        }
+        let t = self.sim.truth();
+        assert!(!t.bumper, "bumped at {:?}", t.drive.pose);
+        t.drive.pose
+    }
+
+    /// The laser's own velocity from the encoder samples around `t`.
+    fn laser_twist(&self, t: Stamp) -> Twist2 {
+        let s = &self.samples;
+        if s.len() < 2 {
+            return Twist2::default();
+        }
+        let i = s.partition_point(|x| x.stamp <= t).clamp(1, s.len() - 1);
+        let (a, b) = (s[i - 1], s[i]);
+        let dt = b.stamp.seconds_since(a.stamp).max(1e-6);
+        let o = &self.odometry;
+        let per_tick = std::f64::consts::TAU * o.wheel_radius_m[0] / f64::from(o.ticks_per_rev);
+        let (dl, dr) = (
+            (b.left_ticks - a.left_ticks) as f64 * per_tick,
+            (b.right_ticks - a.right_ticks) as f64 * per_tick,
+        );
+        let (v, w) = ((dl + dr) / 2.0 / dt, (dr - dl) / o.track_m / dt);
+        let m = &self.mount;
+        let (vx, vy) = (v - w * m.y, w * m.x);
+        let (sn, c) = m.theta.sin_cos();
+        Twist2::new(c * vx + sn * vy, -sn * vx + c * vy, w)
+    }
+}
