@@ -45,11 +45,15 @@ fn laser_twist(
 }
 
 fn run(delay_s: f64, seconds: f64) -> Outcome {
+    run_seed(delay_s, seconds, 11)
+}
+
+fn run_seed(delay_s: f64, seconds: f64, seed: u64) -> Outcome {
     let path = format!("{}/worlds/reference-room.toml", env!("CARGO_MANIFEST_DIR"));
     let world = WorldSpec::load(Path::new(&path)).unwrap();
     let cfg = SimConfig::default();
     let vehicle = cfg.vehicle.clone();
-    let mut sim = Simulator::new(&world, cfg, Some(11));
+    let mut sim = Simulator::new(&world, cfg, Some(seed));
     let odo = OdometryConfig::for_vehicle(&vehicle);
     let start = sim.truth().drive.pose;
     let x0 = RoomState::new(start.x + 0.03, start.y - 0.03, start.theta + 0.01, 5.3, 5.8);
@@ -142,4 +146,28 @@ fn a_late_scan_gives_the_same_estimate_and_the_filter_follows_the_truth() {
         (w - 5.45).abs() < 0.005 && (h - 5.64).abs() < 0.005,
         "room {w} × {h}"
     );
+}
+
+/// ACCEPTANCE.md: the room's size estimated during motion, σ ≤ 3 mm over
+/// runs (paper: 3–12 mm).
+#[test]
+fn room_size_over_runs_within_3_mm() {
+    let sizes: Vec<(f64, f64)> = (0..8)
+        .map(|seed| *run_seed(0.0, 25.0, 200 + seed).size.last().unwrap())
+        .collect();
+    let std = |v: &[f64]| {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        (
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt(),
+            m,
+        )
+    };
+    let (sw, mw) = std(&sizes.iter().map(|s| s.0).collect::<Vec<_>>());
+    let (sh, mh) = std(&sizes.iter().map(|s| s.1).collect::<Vec<_>>());
+    println!(
+        "room size over 8 runs: {mw:.4} m σ {:.1} mm, {mh:.4} m σ {:.1} mm (true 5.45 × 5.64)",
+        sw * 1e3,
+        sh * 1e3
+    );
+    assert!(sw <= 0.003 && sh <= 0.003, "σ {sw} m, {sh} m");
 }

@@ -324,6 +324,42 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// Predictions and updates with any motion and any walls keep the
+        /// covariance symmetric positive semi-definite.
+        #[test]
+        fn covariance_stays_symmetric_positive(
+            moves in proptest::collection::vec((-0.05..0.05f64, -0.05..0.05f64), 1..40),
+            seen in proptest::collection::vec((0usize..4, -0.3..0.3f64, -0.1..0.1f64), 1..12),
+        ) {
+            let mount = Pose2::new(0.35, 0.0, 0.0);
+            let cfg = RoomEkfConfig::new(OdometryConfig::default(), mount);
+            let x0 = RoomState::new(2.0, 2.0, 0.2, 5.0, 4.0);
+            let p0 = RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(1e-3, 1e-3, 1e-3, 0.05, 0.05));
+            let mut ekf = RoomEkf::new(cfg, x0, p0, Stamp::ZERO);
+            let (mut l, mut r) = (0i64, 0i64);
+            for (k, (dl, dr)) in moves.iter().enumerate() {
+                l += (dl * 3000.0) as i64;
+                r += (dr * 3000.0) as i64;
+                ekf.odometry(EncoderSample { stamp: Stamp::from_secs_f64(k as f64 * 0.02), left_ticks: l, right_ticks: r });
+            }
+            let t = Stamp::from_secs_f64(moves.len() as f64 * 0.01);
+            let walls: Vec<Wall> = seen
+                .iter()
+                .map(|&(q, dd, dg)| {
+                    let (z, _) = observe(&x0, q, &mount);
+                    wall(z.x + dd, z.y + dg)
+                })
+                .collect();
+            ekf.scan(t, &walls);
+            let (_, p, _) = ekf.at_last_scan();
+            proptest::prop_assert!((p - p.transpose()).norm() < 1e-12);
+            proptest::prop_assert!(p.symmetric_eigenvalues().iter().all(|&e| e >= -1e-12));
+            let (_, now) = ekf.now();
+            proptest::prop_assert!(now.symmetric_eigenvalues().iter().all(|&e| e >= -1e-12));
+        }
+    }
+
     #[test]
     fn observation_jacobian_matches_finite_differences() {
         let x = RoomState::new(1.2, 2.3, 0.4, 5.45, 5.64);
