@@ -7,10 +7,10 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::Path;
-use stucco_core::{EncoderSample, Platform, Scan, Stamp, Twist2, wrap_angle};
+use stucco_core::{EncoderSample, Platform, Scan, Stamp, wrap_angle};
 use stucco_nav::{
     OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch, RoomState,
-    ScanPoints, Wall,
+    ScanPoints, Wall, sensor_twist, twist_at,
 };
 use stucco_sim::{SimConfig, Simulator, TourDriver, WorldSpec};
 
@@ -18,30 +18,6 @@ struct Outcome {
     estimate: RoomState,
     pose_err: Vec<(f64, f64)>,
     size: Vec<(f64, f64)>,
-}
-
-/// The laser's own velocity from the encoder samples around `t`.
-fn laser_twist(
-    samples: &[EncoderSample],
-    t: Stamp,
-    odo: &OdometryConfig,
-    mount: &stucco_core::Pose2,
-) -> Twist2 {
-    let i = samples
-        .partition_point(|s| s.stamp <= t)
-        .max(1)
-        .min(samples.len() - 1);
-    let (a, b) = (samples[i - 1], samples[i]);
-    let dt = b.stamp.seconds_since(a.stamp).max(1e-6);
-    let per_tick = std::f64::consts::TAU * odo.wheel_radius_m[0] / f64::from(odo.ticks_per_rev);
-    let (dl, dr) = (
-        (b.left_ticks - a.left_ticks) as f64 * per_tick,
-        (b.right_ticks - a.right_ticks) as f64 * per_tick,
-    );
-    let (v, w) = ((dl + dr) / 2.0 / dt, (dr - dl) / odo.track_m / dt);
-    let (vx, vy) = (v - w * mount.y, w * mount.x);
-    let (s, c) = mount.theta.sin_cos();
-    Twist2::new(c * vx + s * vy, -s * vx + c * vy, w)
 }
 
 fn run(delay_s: f64, seconds: f64) -> Outcome {
@@ -76,7 +52,7 @@ fn run_seed(delay_s: f64, seconds: f64, seed: u64) -> Outcome {
         size: vec![],
     };
     let mut apply = |ekf: &mut RoomEkf, scan: &Scan, samples: &[EncoderSample]| {
-        let twist = laser_twist(samples, scan.stamp, &odo, &vehicle.laser_mount);
+        let twist = sensor_twist(&twist_at(samples, scan.stamp, &odo), &vehicle.laser_mount);
         let pts = ScanPoints::from_scan_deskewed(scan, &twist);
         let walls: Vec<Wall> = search
             .find(&pts)

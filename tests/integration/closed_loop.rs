@@ -4,10 +4,10 @@
 
 use nalgebra::SVector;
 use stucco_control::Limiter;
-use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, Twist2};
+use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp};
 use stucco_nav::{
     OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch, RoomState,
-    ScanPoints, Wall,
+    ScanPoints, Wall, sensor_twist, twist_at,
 };
 use stucco_sim::{SimConfig, Simulator, WorldSpec};
 
@@ -84,7 +84,10 @@ impl Navigator {
             self.samples.push(*e);
         }
         for scan in &r.scans {
-            let twist = self.laser_twist(scan.stamp);
+            let twist = sensor_twist(
+                &twist_at(&self.samples, scan.stamp, &self.odometry),
+                &self.mount,
+            );
             let pts = ScanPoints::from_scan_deskewed(scan, &twist);
             let walls: Vec<Wall> = self
                 .search
@@ -96,27 +99,5 @@ impl Navigator {
         let t = self.sim.truth();
         assert!(!t.bumper, "bumped at {:?}", t.drive.pose);
         t.drive.pose
-    }
-
-    /// The laser's own velocity from the encoder samples around `t`.
-    fn laser_twist(&self, t: Stamp) -> Twist2 {
-        let s = &self.samples;
-        if s.len() < 2 {
-            return Twist2::default();
-        }
-        let i = s.partition_point(|x| x.stamp <= t).clamp(1, s.len() - 1);
-        let (a, b) = (s[i - 1], s[i]);
-        let dt = b.stamp.seconds_since(a.stamp).max(1e-6);
-        let o = &self.odometry;
-        let per_tick = std::f64::consts::TAU * o.wheel_radius_m[0] / f64::from(o.ticks_per_rev);
-        let (dl, dr) = (
-            (b.left_ticks - a.left_ticks) as f64 * per_tick,
-            (b.right_ticks - a.right_ticks) as f64 * per_tick,
-        );
-        let (v, w) = ((dl + dr) / 2.0 / dt, (dr - dl) / o.track_m / dt);
-        let m = &self.mount;
-        let (vx, vy) = (v - w * m.y, w * m.x);
-        let (sn, c) = m.theta.sin_cos();
-        Twist2::new(c * vx + sn * vy, -sn * vx + c * vy, w)
     }
 }

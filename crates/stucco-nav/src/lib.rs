@@ -55,7 +55,7 @@ pub use error::NavError;
 pub use extractor::WallExtractor;
 pub use hough::{HoughConfig, HoughTransform, Weighting};
 pub use line_fit::FitConfig;
-pub use odometry::{DeadReckoning, Displacement, OdometryConfig};
+pub use odometry::{DeadReckoning, Displacement, OdometryConfig, sensor_twist, twist_at};
 pub use points::{ScanPoint, ScanPoints};
 pub use ransac::{RansacConfig, RansacExtractor};
 pub use room::{RectangularRoom, RoomConfig, RoomSearch};

@@ -7,7 +7,7 @@
 
 use nalgebra::{Matrix2, Matrix3, Matrix3x2, Vector3};
 use serde::{Deserialize, Serialize};
-use stucco_core::{EncoderSample, Pose2, Stamp, VehicleSpec};
+use stucco_core::{EncoderSample, Pose2, Stamp, Twist2, VehicleSpec};
 
 /// The encoders and how much to trust them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -127,6 +127,33 @@ impl Displacement {
     }
 }
 
+/// The robot's velocity over the pair of encoder samples that spans `t`
+/// (or the nearest pair), for undoing a scan's motion distortion.
+pub fn twist_at(samples: &[EncoderSample], t: Stamp, cfg: &OdometryConfig) -> Twist2 {
+    if samples.len() < 2 {
+        return Twist2::default();
+    }
+    let i = samples
+        .partition_point(|s| s.stamp <= t)
+        .clamp(1, samples.len() - 1);
+    let (a, b) = (samples[i - 1], samples[i]);
+    let dt = b.stamp.seconds_since(a.stamp).max(1e-9);
+    let per_tick =
+        |w: usize| std::f64::consts::TAU * cfg.wheel_radius_m[w] / f64::from(cfg.ticks_per_rev);
+    let dl = (b.left_ticks - a.left_ticks) as f64 * per_tick(0);
+    let dr = (b.right_ticks - a.right_ticks) as f64 * per_tick(1);
+    Twist2::new((dl + dr) / 2.0 / dt, 0.0, (dr - dl) / cfg.track_m / dt)
+}
+
+/// The velocity, in its own frame, of a sensor mounted at `mount` on a
+/// robot moving with `robot`.
+pub fn sensor_twist(robot: &Twist2, mount: &Pose2) -> Twist2 {
+    let w = robot.omega_radps;
+    let (vx, vy) = (robot.vx_mps - w * mount.y, robot.vy_mps + w * mount.x);
+    let (s, c) = mount.theta.sin_cos();
+    Twist2::new(c * vx + s * vy, -s * vx + c * vy, w)
+}
+
 /// Dead reckoning from encoder samples.
 #[derive(Clone, Debug)]
 pub struct DeadReckoning {
@@ -241,6 +268,20 @@ mod tests {
             assert!(tr > last);
             last = tr;
         }
+    }
+
+    #[test]
+    fn a_sensor_ahead_of_the_axle_moves_sideways_when_the_robot_turns() {
+        let robot = Twist2::new(0.5, 0.0, 1.0);
+        let t = sensor_twist(&robot, &Pose2::new(0.4, 0.0, 0.0));
+        assert!((t.vx_mps - 0.5).abs() < 1e-12 && (t.vy_mps - 0.4).abs() < 1e-12);
+        // Mounted looking left, the forward motion is to its right.
+        let t = sensor_twist(&robot, &Pose2::new(0.0, 0.0, std::f64::consts::FRAC_PI_2));
+        assert!(t.vx_mps.abs() < 1e-12 && (t.vy_mps + 0.5).abs() < 1e-12);
+        let cfg = OdometryConfig::default();
+        let samples = [sample(0.0, 0, 0), sample(0.02, 100, 120)];
+        let tw = twist_at(&samples, Stamp::from_secs_f64(0.01), &cfg);
+        assert!(tw.vx_mps > 0.0 && tw.omega_radps > 0.0);
     }
 
     #[test]
