@@ -15,7 +15,7 @@ use stucco_nav::{
 use stucco_sim::{SimConfig, Simulator, TourDriver, WorldSpec};
 
 struct Outcome {
-    estimate: RoomState,
+    estimate: nalgebra::DVector<f64>,
     pose_err: Vec<(f64, f64)>,
     size: Vec<(f64, f64)>,
 }
@@ -47,7 +47,7 @@ fn run_seed(delay_s: f64, seconds: f64, seed: u64) -> Outcome {
     let mut samples: Vec<EncoderSample> = Vec::new();
     let mut queue: Vec<Scan> = Vec::new();
     let mut out = Outcome {
-        estimate: x0,
+        estimate: nalgebra::DVector::from_column_slice(x0.as_slice()),
         pose_err: vec![],
         size: vec![],
     };
@@ -58,7 +58,7 @@ fn run_seed(delay_s: f64, seconds: f64, seed: u64) -> Outcome {
             .find(&pts)
             .map(|r| r.walls.into_iter().flatten().collect())
             .unwrap_or_default();
-        ekf.scan(scan.stamp, &walls);
+        ekf.scan(scan.stamp, &walls, &[]);
     };
     for _ in 0..(seconds / 0.02) as usize {
         let pose = sim.truth().drive.pose;

@@ -2,12 +2,12 @@
 //! encoders and the room search's walls feed the room filter, a law's
 //! command goes through the vehicle's limits, the truth stays aside.
 
-use nalgebra::SVector;
+use nalgebra::{DVector, SVector};
 use stucco_control::Limiter;
 use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp};
 use stucco_nav::{
-    OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch, RoomState,
-    ScanPoints, Wall, sensor_twist, twist_at,
+    DoorConfig, OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch,
+    RoomState, ScanPoints, Wall, find_doors, sensor_twist, twist_at,
 };
 use stucco_sim::{SimConfig, Simulator, WorldSpec};
 
@@ -23,6 +23,7 @@ pub struct Navigator {
     odometry: OdometryConfig,
     mount: Pose2,
     samples: Vec<EncoderSample>,
+    doors: DoorConfig,
 }
 
 impl Navigator {
@@ -32,6 +33,7 @@ impl Navigator {
     pub fn new(world: &WorldSpec, seed: u64, x0: RoomState, size_sigma_m: [f64; 2]) -> Self {
         let cfg = SimConfig::default();
         let vehicle = cfg.vehicle.clone();
+        let cfg_laser = cfg.laser.clone();
         let odometry = OdometryConfig::for_vehicle(&vehicle);
         let p0 = RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(
             4e-4,
@@ -53,12 +55,18 @@ impl Navigator {
             odometry,
             mount: vehicle.laser_mount,
             samples: Vec::new(),
+            doors: DoorConfig::for_laser(&cfg_laser),
         }
     }
 
     /// The filter's estimate now.
-    pub fn estimate(&self) -> RoomState {
+    pub fn estimate(&self) -> DVector<f64> {
         self.ekf.now().0
+    }
+
+    /// Puts a door into the filter's state (see [`RoomEkf::add_door`]).
+    pub fn add_door(&mut self, wall: usize, position_m: f64, sigma_m: f64) -> usize {
+        self.ekf.add_door(wall, position_m, sigma_m).index
     }
 
     /// The true pose (for scoring only).
@@ -94,7 +102,8 @@ impl Navigator {
                 .find(&pts)
                 .map(|room| room.walls.into_iter().flatten().collect())
                 .unwrap_or_default();
-            self.ekf.scan(scan.stamp, &walls);
+            let doors = find_doors(scan, &walls, &self.doors);
+            self.ekf.scan(scan.stamp, &walls, &doors);
         }
         let t = self.sim.truth();
         assert!(!t.bumper, "bumped at {:?}", t.drive.pose);

@@ -3,7 +3,9 @@
 //! "difficult" (2 m in front, to the side), drives through the reference
 //! room's door on the papers' line law, its pose from the room filter (the
 //! encoders and the walls the room search finds), people walking about;
-//! the lateral offset and heading at the door plane come from the truth.
+//! the door's position along its wall is in the filter's state, placed by
+//! the openings the door detection finds (it starts 5 cm off); the
+//! lateral offset and heading at the door plane come from the truth.
 //! The default run does 4 runs per condition; the 20-run study is ignored:
 //! `cargo test --release -p stucco-acceptance --test integration door_passage_table_iii -- --ignored --nocapture`.
 
@@ -19,8 +21,9 @@ const DOOR_X: f64 = 5.45;
 const DOOR_Y: f64 = 2.55;
 
 /// One passage: the lateral offset (m) and heading (rad) of the rear axle
-/// as it crosses the door plane, from the truth.
-fn passage(start: Pose2, speed: f64, seed: u64) -> (f64, f64) {
+/// as it crosses the door plane, from the truth, and the error of the
+/// filter's estimate of the door's position then.
+fn passage(start: Pose2, speed: f64, seed: u64) -> (f64, f64, f64) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../sim/worlds/reference-room.toml"
@@ -51,17 +54,23 @@ fn passage(start: Pose2, speed: f64, seed: u64) -> (f64, f64) {
         5.75,
     );
     let mut nav = Navigator::new(&world, seed, x0, [0.2, 0.2]);
+    // The door, in the wall x = xs, as a map would give it (5 cm off,
+    // σ 10 cm): the filter places it from the openings it sees.
+    let door = nav.add_door(2, DOOR_Y - 0.05, 0.1);
     let law = LineFollower::new(GainSchedule::default());
     let mut before = nav.truth();
     for _ in 0..3000 {
         let x = nav.estimate();
+        // The law aims at the map's door; the filter's own estimate of it
+        // is reported beside (at 0.8 m/s from close starts it is still
+        // several millimetres off at the door).
         let now = nav.step(speed, law.steer(x[1] - DOOR_Y, x[2], speed));
         if now.x >= DOOR_X {
             // Interpolate the crossing between the last two steps.
             let f = (DOOR_X - before.x) / (now.x - before.x);
             let y = before.y + f * (now.y - before.y);
             let th = before.theta + f * stucco_core::wrap_angle(now.theta - before.theta);
-            return (y - DOOR_Y, th);
+            return (y - DOOR_Y, th, nav.estimate()[door] - DOOR_Y);
         }
         before = now;
     }
@@ -99,9 +108,12 @@ fn table_iii(runs: u64) -> Vec<(String, f64, f64, f64, f64)> {
     conditions()
         .iter()
         .map(|c| {
-            let (lat, head): (Vec<f64>, Vec<f64>) = (0..runs)
+            let runs: Vec<(f64, f64, f64)> = (0..runs)
                 .map(|seed| passage(c.start, c.speed, 100 + seed))
-                .unzip();
+                .collect();
+            let lat: Vec<f64> = runs.iter().map(|r| r.0).collect();
+            let head: Vec<f64> = runs.iter().map(|r| r.1).collect();
+            let door: Vec<f64> = runs.iter().map(|r| r.2).collect();
             let mean_lat = lat.iter().sum::<f64>() / lat.len() as f64;
             let mean_head = head.iter().sum::<f64>() / head.len() as f64;
             let row = (
@@ -112,12 +124,13 @@ fn table_iii(runs: u64) -> Vec<(String, f64, f64, f64, f64)> {
                 mean_head,
             );
             println!(
-                "{:>18}: lateral σ {:.1} mm (mean {:+.1}), heading σ {:.2} mrad (mean {:+.2})",
+                "{:>18}: lateral σ {:.1} mm (mean {:+.1}), heading σ {:.2} mrad (mean {:+.2}); door estimate off by {:.1} mm RMS",
                 row.0,
                 row.1 * 1e3,
                 row.3 * 1e3,
                 row.2 * 1e3,
-                row.4 * 1e3
+                row.4 * 1e3,
+                (door.iter().map(|d| d * d).sum::<f64>() / door.len() as f64).sqrt() * 1e3
             );
             row
         })

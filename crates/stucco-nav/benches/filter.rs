@@ -22,7 +22,11 @@ fn filter(c: &mut Criterion) {
     let p0 = RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(1e-4, 1e-4, 1e-4, 1e-3, 1e-3));
     let walls: Vec<Wall> = (0..4)
         .map(|q| {
-            let (z, _) = observe(&truth, q, &mount);
+            let (z, _) = observe(
+                &nalgebra::DVector::from_column_slice(truth.as_slice()),
+                q,
+                &mount,
+            );
             Wall {
                 d_m: z.x,
                 gamma_rad: z.y,
@@ -45,7 +49,7 @@ fn filter(c: &mut Criterion) {
     g.bench_function("update-4-walls", |b| {
         b.iter_batched(
             fresh,
-            |mut ekf| black_box(ekf.scan(Stamp::from_secs_f64(0.1), black_box(&walls))),
+            |mut ekf| black_box(ekf.scan(Stamp::from_secs_f64(0.1), black_box(&walls), &[])),
             criterion::BatchSize::SmallInput,
         );
     });
@@ -76,7 +80,7 @@ fn filter(c: &mut Criterion) {
                     .find(&scans[i])
                     .map(|r| r.walls.into_iter().flatten().collect())
                     .unwrap_or_default();
-                black_box(ekf.scan(Stamp::from_secs_f64(0.1), &walls))
+                black_box(ekf.scan(Stamp::from_secs_f64(0.1), &walls, &[]))
             },
             criterion::BatchSize::SmallInput,
         );

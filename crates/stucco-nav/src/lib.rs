@@ -60,7 +60,8 @@ pub use points::{ScanPoint, ScanPoints};
 pub use ransac::{RansacConfig, RansacExtractor};
 pub use room::{RectangularRoom, RoomConfig, RoomSearch};
 pub use room_ekf::{
-    RoomCovariance, RoomEkf, RoomEkfConfig, RoomState, ScanUpdate, observe, predict,
+    RoomCovariance, RoomDoor, RoomEkf, RoomEkfConfig, RoomState, ScanUpdate, observe, observe_door,
+    predict,
 };
 pub use rwht::{RwhtConfig, RwhtExtractor};
 pub use wall::Wall;

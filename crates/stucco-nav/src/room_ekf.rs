@@ -5,7 +5,9 @@
 //!
 //! The room frame has its origin in a corner and its walls on the lines
 //! `x = 0`, `y = 0`, `x = xs`, `y = ys`. The state is
-//! `(x, y, θ, xs, ys)`: the rear axle's pose and the room's size.
+//! `(x, y, θ, xs, ys, s₁, s₂, …)`: the rear axle's pose, the room's size,
+//! and the position of each door along its wall (added with
+//! [`RoomEkf::add_door`]).
 //!
 //! A scan is applied at its own stamp: the filter holds its estimate at the
 //! last scan's stamp and the encoder samples that came since; a new scan's
@@ -14,17 +16,29 @@
 //! the extraction took — how late the scan is handed in — never changes
 //! the estimate.
 
+use crate::door::DoorOpening;
 use crate::odometry::{Displacement, OdometryConfig};
 use crate::wall::Wall;
-use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2};
 use serde::Serialize;
 use std::f64::consts::{FRAC_PI_2, PI};
 use stucco_core::{EncoderSample, Pose2, Stamp, wrap_angle};
 
-/// The filter's state vector.
+/// The filter's state without doors: `(x, y, θ, xs, ys)`.
 pub type RoomState = SVector<f64, 5>;
 /// Its covariance.
 pub type RoomCovariance = SMatrix<f64, 5, 5>;
+
+/// A door of the room: the wall it is in (0: x = 0, 1: y = 0, 2: x = xs,
+/// 3: y = ys) and the index of its position (along the wall's axis: y for
+/// walls 0 and 2, x for 1 and 3) in the state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct RoomDoor {
+    /// The wall.
+    pub wall: usize,
+    /// Index in the state.
+    pub index: usize,
+}
 
 /// Settings of the room filter.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,17 +74,56 @@ pub struct ScanUpdate {
     pub used: Vec<usize>,
     /// Walls rejected by the innovation gate.
     pub rejected: usize,
+    /// Doors used, by their index in the state.
+    pub doors_used: Vec<usize>,
 }
 
-/// An observed wall paired with a room wall: which, its squared
-/// Mahalanobis distance, innovation, Jacobian and inverse innovation
-/// covariance.
-struct Match {
-    wall: usize,
+/// An innovation: squared Mahalanobis distance, innovation, inverse of
+/// its covariance.
+struct Innovation {
     m2: f64,
     nu: Vector2<f64>,
-    h: SMatrix<f64, 2, 5>,
     s_inv: Matrix2<f64>,
+}
+
+/// The innovation of `z` against its prediction `z_hat` (the second
+/// component an angle when `angular`).
+fn innovation(
+    p: &DMatrix<f64>,
+    z: &Vector2<f64>,
+    z_hat: &Vector2<f64>,
+    h: &DMatrix<f64>,
+    r: &Matrix2<f64>,
+    angular: bool,
+) -> Option<Innovation> {
+    let hp = h * p * h.transpose();
+    let s = Matrix2::new(hp[(0, 0)], hp[(0, 1)], hp[(1, 0)], hp[(1, 1)]) + r;
+    let s_inv = s.try_inverse()?;
+    let dy = z.y - z_hat.y;
+    let nu = Vector2::new(z.x - z_hat.x, if angular { wrap_angle(dy) } else { dy });
+    let m2 = (nu.transpose() * s_inv * nu)[(0, 0)];
+    Some(Innovation { m2, nu, s_inv })
+}
+
+/// The Kalman update of `x`, `p` with innovation `m` (Joseph form, which
+/// keeps `p` symmetric and positive).
+fn update(
+    x: &mut DVector<f64>,
+    p: &mut DMatrix<f64>,
+    h: &DMatrix<f64>,
+    m: &Innovation,
+    r: &Matrix2<f64>,
+) {
+    let s_inv = DMatrix::from_column_slice(2, 2, m.s_inv.as_slice());
+    let k = &*p * h.transpose() * s_inv;
+    let nu = DVector::from_column_slice(m.nu.as_slice());
+    *x += &k * nu;
+    x[2] = wrap_angle(x[2]);
+    let n = x.len();
+    let i_kh = DMatrix::identity(n, n) - &k * h;
+    let r = DMatrix::from_column_slice(2, 2, r.as_slice());
+    let q = &i_kh * &*p * i_kh.transpose() + &k * r * k.transpose();
+    *p = 0.5 * (&q + q.transpose());
 }
 
 /// The room filter with its delayed-measurement bookkeeping.
@@ -78,8 +131,9 @@ struct Match {
 pub struct RoomEkf {
     config: RoomEkfConfig,
     /// The estimate at `at` (the last scan's stamp, or the start).
-    x: RoomState,
-    p: RoomCovariance,
+    x: DVector<f64>,
+    p: DMatrix<f64>,
+    doors: Vec<RoomDoor>,
     at: Stamp,
     /// The encoder sample the estimate's pose corresponds to.
     anchor: Option<EncoderSample>,
@@ -92,8 +146,9 @@ impl RoomEkf {
     pub fn new(config: RoomEkfConfig, x0: RoomState, p0: RoomCovariance, at: Stamp) -> Self {
         RoomEkf {
             config,
-            x: x0,
-            p: p0,
+            x: DVector::from_column_slice(x0.as_slice()),
+            p: DMatrix::from_column_slice(5, 5, p0.as_slice()),
+            doors: Vec::new(),
             at,
             anchor: None,
             pending: Vec::new(),
@@ -101,8 +156,27 @@ impl RoomEkf {
     }
 
     /// The estimate at the last scan, and when that was.
-    pub fn at_last_scan(&self) -> (&RoomState, &RoomCovariance, Stamp) {
+    pub fn at_last_scan(&self) -> (&DVector<f64>, &DMatrix<f64>, Stamp) {
         (&self.x, &self.p, self.at)
+    }
+
+    /// Adds a door in room wall `wall` at `position_m` along it (y for
+    /// walls 0 and 2, x for 1 and 3), `sigma_m` uncertain; returns it.
+    pub fn add_door(&mut self, wall: usize, position_m: f64, sigma_m: f64) -> RoomDoor {
+        let n = self.x.len();
+        self.x = self.x.clone().insert_row(n, position_m);
+        let mut p = DMatrix::zeros(n + 1, n + 1);
+        p.view_mut((0, 0), (n, n)).copy_from(&self.p);
+        p[(n, n)] = sigma_m * sigma_m;
+        self.p = p;
+        let door = RoomDoor { wall, index: n };
+        self.doors.push(door);
+        door
+    }
+
+    /// The doors in the state.
+    pub fn doors(&self) -> &[RoomDoor] {
+        &self.doors
     }
 
     /// Takes an encoder sample (dead reckoning runs at the encoders' rate).
@@ -116,7 +190,7 @@ impl RoomEkf {
 
     /// The estimate now: the last scan's estimate re-predicted with the
     /// displacement accumulated since (eq. 8).
-    pub fn now(&self) -> (RoomState, RoomCovariance) {
+    pub fn now(&self) -> (DVector<f64>, DMatrix<f64>) {
         let d = self.displacement(self.pending.len(), None);
         predict(&self.x, &self.p, &d)
     }
@@ -152,62 +226,53 @@ impl RoomEkf {
         d
     }
 
-    /// Applies the walls seen in a scan stamped `stamp` (its first beam),
-    /// given in the laser's frame: predicts the last estimate through the
-    /// odometry up to `stamp`, associates each wall with the room wall it
-    /// predicts nearest (within the gate), and updates. The samples after
-    /// `stamp` stay pending for [`RoomEkf::now`].
-    pub fn scan(&mut self, stamp: Stamp, walls: &[Wall]) -> ScanUpdate {
+    /// Applies the walls and door openings seen in a scan stamped `stamp`
+    /// (its first beam), given in the laser's frame: predicts the last
+    /// estimate through the odometry up to `stamp`, associates each wall
+    /// with the room wall it predicts nearest and each opening with the
+    /// door it predicts nearest (within the gate), and updates. The samples
+    /// after `stamp` stay pending for [`RoomEkf::now`].
+    pub fn scan(&mut self, stamp: Stamp, walls: &[Wall], doors: &[DoorOpening]) -> ScanUpdate {
         let n = self.pending.iter().take_while(|s| s.stamp <= stamp).count();
         let d = self.displacement(n, Some(stamp));
         let (mut x, mut p) = predict(&self.x, &self.p, &d);
         let mut report = ScanUpdate::default();
+        let floor = Matrix2::from_diagonal(&Vector2::from(self.config.min_wall_variance));
         for wall in walls {
-            let mut best: Option<Match> = None;
-            for q in 0..4 {
-                let (z_hat, h) = observe(&x, q, &self.config.laser_mount);
-                let r = wall.covariance
-                    + Matrix2::from_diagonal(&Vector2::from(self.config.min_wall_variance));
-                let s = h * p * h.transpose() + r;
-                let Some(s_inv) = s.try_inverse() else {
-                    continue;
-                };
-                let nu = Vector2::new(wall.d_m - z_hat.x, wrap_angle(wall.gamma_rad - z_hat.y));
-                let m2 = (nu.transpose() * s_inv * nu)[(0, 0)];
-                if best.as_ref().is_none_or(|b| m2 < b.m2) {
-                    best = Some(Match {
-                        wall: q,
-                        m2,
-                        nu,
-                        h,
-                        s_inv,
-                    });
-                }
-            }
-            let Some(Match {
-                wall: q,
-                m2,
-                nu,
-                h,
-                s_inv,
-            }) = best
-            else {
-                continue;
-            };
-            if m2 > self.config.gate_chi2 {
+            let z = Vector2::new(wall.d_m, wall.gamma_rad);
+            let r = wall.covariance + floor;
+            let best = (0..4)
+                .filter_map(|q| {
+                    let (z_hat, h) = observe(&x, q, &self.config.laser_mount);
+                    innovation(&p, &z, &z_hat, &h, &r, true).map(|m| (q, m, h))
+                })
+                .min_by(|a, b| a.1.m2.total_cmp(&b.1.m2));
+            let Some((q, m, h)) = best else { continue };
+            if m.m2 > self.config.gate_chi2 {
                 report.rejected += 1;
                 continue;
             }
-            let k = p * h.transpose() * s_inv;
-            x += k * nu;
-            x[2] = wrap_angle(x[2]);
-            // Joseph form keeps P symmetric and positive.
-            let i_kh = RoomCovariance::identity() - k * h;
-            let r = wall.covariance
-                + Matrix2::from_diagonal(&Vector2::from(self.config.min_wall_variance));
-            p = i_kh * p * i_kh.transpose() + k * r * k.transpose();
-            p = 0.5 * (p + p.transpose());
+            update(&mut x, &mut p, &h, &m, &r);
             report.used.push(q);
+        }
+        for opening in doors {
+            let z = Vector2::new(opening.center.x, opening.center.y);
+            let r = opening.covariance + Matrix2::identity() * 1e-6;
+            let best = self
+                .doors
+                .iter()
+                .filter_map(|door| {
+                    let (z_hat, h) = observe_door(&x, door, &self.config.laser_mount);
+                    innovation(&p, &z, &z_hat, &h, &r, false).map(|m| (door.index, m, h))
+                })
+                .min_by(|a, b| a.1.m2.total_cmp(&b.1.m2));
+            let Some((index, m, h)) = best else { continue };
+            if m.m2 > self.config.gate_chi2 {
+                report.rejected += 1;
+                continue;
+            }
+            update(&mut x, &mut p, &h, &m, &r);
+            report.doors_used.push(index);
         }
         // The scan's stamp is the new reference: the odometry from the
         // anchor to it is spent.
@@ -246,66 +311,125 @@ impl RoomEkf {
 }
 
 /// The state moved by a displacement (eq. 5) and its covariance (eq. 6–7):
-/// the pose composed, the room unchanged.
-pub fn predict(x: &RoomState, p: &RoomCovariance, d: &Displacement) -> (RoomState, RoomCovariance) {
+/// the pose composed, the room and its doors unchanged.
+pub fn predict(
+    x: &DVector<f64>,
+    p: &DMatrix<f64>,
+    d: &Displacement,
+) -> (DVector<f64>, DMatrix<f64>) {
     let th = x[2];
     let (s, c) = th.sin_cos();
     let dp = d.pose;
-    let mut out = *x;
+    let mut out = x.clone();
     out[0] += c * dp.x - s * dp.y;
     out[1] += s * dp.x + c * dp.y;
     out[2] = wrap_angle(th + dp.theta);
-    let mut f = RoomCovariance::identity();
+    let n = x.len();
+    let mut f = DMatrix::identity(n, n);
     f[(0, 2)] = -s * dp.x - c * dp.y;
     f[(1, 2)] = c * dp.x - s * dp.y;
     let rot = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
     let q = rot * d.covariance * rot.transpose();
-    let mut out_p = f * p * f.transpose();
+    let mut out_p = &f * p * f.transpose();
     for i in 0..3 {
         for j in 0..3 {
             out_p[(i, j)] += q[(i, j)];
         }
     }
-    (out, 0.5 * (out_p + out_p.transpose()))
+    let sym = 0.5 * (&out_p + out_p.transpose());
+    (out, sym)
+}
+
+/// The laser's pose in the room for state `x`, and the derivative of its
+/// position with respect to the heading.
+fn laser_pose(x: &DVector<f64>, mount: &Pose2) -> (Pose2, [f64; 2]) {
+    let (s, c) = x[2].sin_cos();
+    (
+        Pose2 {
+            x: x[0] + c * mount.x - s * mount.y,
+            y: x[1] + s * mount.x + c * mount.y,
+            theta: x[2] + mount.theta,
+        },
+        [-s * mount.x - c * mount.y, c * mount.x - s * mount.y],
+    )
 }
 
 /// The predicted observation `(d, γ)` of room wall `q` from the laser at
 /// `mount` on a robot in state `x`, and its Jacobian.
-pub fn observe(x: &RoomState, q: usize, mount: &Pose2) -> (Vector2<f64>, SMatrix<f64, 2, 5>) {
-    let (s, c) = x[2].sin_cos();
-    let lx = x[0] + c * mount.x - s * mount.y;
-    let ly = x[1] + s * mount.x + c * mount.y;
-    let lth = x[2] + mount.theta;
-    // ∂(lx, ly)/∂θ.
-    let dlx = -s * mount.x - c * mount.y;
-    let dly = c * mount.x - s * mount.y;
-    let mut h = SMatrix::<f64, 2, 5>::zeros();
+pub fn observe(x: &DVector<f64>, q: usize, mount: &Pose2) -> (Vector2<f64>, DMatrix<f64>) {
+    let (l, [dlx, dly]) = laser_pose(x, mount);
+    let mut h = DMatrix::zeros(2, x.len());
     h[(1, 2)] = -1.0;
     let (d, normal) = match q {
         0 => {
             h[(0, 0)] = 1.0;
             h[(0, 2)] = dlx;
-            (lx, PI)
+            (l.x, PI)
         }
         1 => {
             h[(0, 1)] = 1.0;
             h[(0, 2)] = dly;
-            (ly, -FRAC_PI_2)
+            (l.y, -FRAC_PI_2)
         }
         2 => {
             h[(0, 0)] = -1.0;
             h[(0, 2)] = -dlx;
             h[(0, 3)] = 1.0;
-            (x[3] - lx, 0.0)
+            (x[3] - l.x, 0.0)
         }
         _ => {
             h[(0, 1)] = -1.0;
             h[(0, 2)] = -dly;
             h[(0, 4)] = 1.0;
-            (x[4] - ly, FRAC_PI_2)
+            (x[4] - l.y, FRAC_PI_2)
         }
     };
-    (Vector2::new(d, wrap_angle(normal - lth)), h)
+    (Vector2::new(d, wrap_angle(normal - l.theta)), h)
+}
+
+/// The predicted centre of `door`, in the laser's frame, and its Jacobian.
+pub fn observe_door(
+    x: &DVector<f64>,
+    door: &RoomDoor,
+    mount: &Pose2,
+) -> (Vector2<f64>, DMatrix<f64>) {
+    let (l, [dlx, dly]) = laser_pose(x, mount);
+    let s = x[door.index];
+    // The door's centre in the room, and which state it moves with.
+    let (centre, along, across) = match door.wall {
+        0 => (Vector2::new(0.0, s), Vector2::new(0.0, 1.0), None),
+        1 => (Vector2::new(s, 0.0), Vector2::new(1.0, 0.0), None),
+        2 => (
+            Vector2::new(x[3], s),
+            Vector2::new(0.0, 1.0),
+            Some((3, Vector2::new(1.0, 0.0))),
+        ),
+        _ => (
+            Vector2::new(s, x[4]),
+            Vector2::new(1.0, 0.0),
+            Some((4, Vector2::new(0.0, 1.0))),
+        ),
+    };
+    let (sn, c) = l.theta.sin_cos();
+    // p = R(−θ_L)·(centre − L).
+    let r_inv = Matrix2::new(c, sn, -sn, c);
+    let v = centre - Vector2::new(l.x, l.y);
+    let z = r_inv * v;
+    let dr_inv = Matrix2::new(-sn, c, -c, -sn);
+    let d_theta = dr_inv * v - r_inv * Vector2::new(dlx, dly);
+    let mut h = DMatrix::zeros(2, x.len());
+    for row in 0..2 {
+        h[(row, 0)] = -r_inv[(row, 0)];
+        h[(row, 1)] = -r_inv[(row, 1)];
+        h[(row, 2)] = d_theta[row];
+        let a = r_inv * along;
+        h[(row, door.index)] = a[row];
+        if let Some((i, dir)) = across {
+            let b = r_inv * dir;
+            h[(row, i)] = b[row];
+        }
+    }
+    (z, h)
 }
 
 #[cfg(test)]
@@ -347,11 +471,11 @@ mod tests {
             let walls: Vec<Wall> = seen
                 .iter()
                 .map(|&(q, dd, dg)| {
-                    let (z, _) = observe(&x0, q, &mount);
+                    let (z, _) = observe(&DVector::from_column_slice(x0.as_slice()), q, &mount);
                     wall(z.x + dd, z.y + dg)
                 })
                 .collect();
-            ekf.scan(t, &walls);
+            ekf.scan(t, &walls, &[]);
             let (_, p, _) = ekf.at_last_scan();
             proptest::prop_assert!((p - p.transpose()).norm() < 1e-12);
             proptest::prop_assert!(p.symmetric_eigenvalues().iter().all(|&e| e >= -1e-12));
@@ -362,12 +486,12 @@ mod tests {
 
     #[test]
     fn observation_jacobian_matches_finite_differences() {
-        let x = RoomState::new(1.2, 2.3, 0.4, 5.45, 5.64);
+        let x = DVector::from_vec(vec![1.2, 2.3, 0.4, 5.45, 5.64]);
         let mount = Pose2::new(0.35, 0.05, 0.02);
         for q in 0..4 {
             let (z, h) = observe(&x, q, &mount);
             for i in 0..5 {
-                let mut dx = x;
+                let mut dx = x.clone();
                 dx[i] += 1e-7;
                 let (z2, _) = observe(&dx, q, &mount);
                 let num = (z2 - z) / 1e-7;
@@ -375,6 +499,59 @@ mod tests {
                 assert!((wrap_angle(num.y * 1e-7) / 1e-7 - h[(1, i)]).abs() < 1e-5);
             }
         }
+    }
+
+    #[test]
+    fn door_jacobian_matches_finite_differences() {
+        let x = DVector::from_vec(vec![1.2, 2.3, 0.4, 5.45, 5.64, 2.55, 3.1]);
+        let mount = Pose2::new(0.35, 0.05, 0.02);
+        for (wall, index) in [(2, 5), (3, 6), (0, 5), (1, 6)] {
+            let door = RoomDoor { wall, index };
+            let (z, h) = observe_door(&x, &door, &mount);
+            for i in 0..7 {
+                let mut dx = x.clone();
+                dx[i] += 1e-7;
+                let (z2, _) = observe_door(&dx, &door, &mount);
+                let num = (z2 - z) / 1e-7;
+                for row in 0..2 {
+                    assert!(
+                        (num[row] - h[(row, i)]).abs() < 1e-5,
+                        "wall {wall} i {i} row {row}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_seen_door_places_itself_in_the_state() {
+        let truth = DVector::from_vec(vec![2.0, 2.5, 0.1, 5.45, 5.64, 2.55]);
+        let mount = Pose2::new(0.35, 0.0, 0.0);
+        let cfg = RoomEkfConfig::new(OdometryConfig::default(), mount);
+        let x0 = RoomState::new(2.0, 2.5, 0.1, 5.45, 5.64);
+        let p0 =
+            RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(1e-4, 1e-4, 1e-5, 1e-4, 1e-4));
+        let mut ekf = RoomEkf::new(cfg, x0, p0, Stamp::ZERO);
+        let door = ekf.add_door(2, 2.35, 0.3);
+        let (z, _) = observe_door(&truth, &door, &mount);
+        let opening = DoorOpening {
+            wall: 0,
+            center: Point2::new(z.x, z.y),
+            covariance: Matrix2::identity() * 1e-4,
+            width_m: 0.9,
+            width_sigma_m: 0.01,
+            frames: [Point2::origin(), Point2::origin()],
+        };
+        for k in 0..10 {
+            let r = ekf.scan(
+                Stamp::from_secs_f64(k as f64 * 0.125),
+                &[],
+                std::slice::from_ref(&opening),
+            );
+            assert_eq!(r.doors_used, vec![door.index]);
+        }
+        let (x, _, _) = ekf.at_last_scan();
+        assert!((x[door.index] - 2.55).abs() < 0.01, "{}", x[door.index]);
     }
 
     #[test]
@@ -388,21 +565,24 @@ mod tests {
         let mut ekf = RoomEkf::new(cfg, x0, p0, Stamp::ZERO);
         let walls: Vec<Wall> = (0..4)
             .map(|q| {
-                let (z, _) = observe(&truth, q, &mount);
+                let (z, _) = observe(&DVector::from_column_slice(truth.as_slice()), q, &mount);
                 wall(z.x, z.y)
             })
             .collect();
         for k in 0..5 {
-            let r = ekf.scan(Stamp::from_secs_f64(k as f64 * 0.125), &walls);
+            let r = ekf.scan(Stamp::from_secs_f64(k as f64 * 0.125), &walls, &[]);
             assert_eq!(r.used.len(), 4, "{r:?}");
         }
         let (x, p, _) = ekf.at_last_scan();
-        assert!((x - truth).norm() < 1e-3, "{x}");
+        assert!(
+            (x - DVector::from_column_slice(truth.as_slice())).norm() < 1e-3,
+            "{x}"
+        );
         assert!((p - p.transpose()).norm() < 1e-15);
         assert!(p.symmetric_eigenvalues().iter().all(|&e| e > 0.0));
         // A person 1 m in front of the far wall is gated out.
         let person = wall(walls[2].d_m - 1.0, walls[2].gamma_rad);
-        let r = ekf.scan(Stamp::from_secs_f64(1.0), &[person]);
+        let r = ekf.scan(Stamp::from_secs_f64(1.0), &[person], &[]);
         assert_eq!((r.used.len(), r.rejected), (0, 1));
     }
 }
