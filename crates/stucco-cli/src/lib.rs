@@ -4,13 +4,21 @@
 //! - [`read_carmen_file`], [`CarmenReader`]: CARMEN laser logs.
 //! - [`run_walls`]: the `stucco walls` job.
 //! - [`run_simbench`]: the `stucco simbench` job.
+//! - [`run_mission`]: the `stucco run` job for experiment missions
+//!   ([`Mission`]), closing the loop through [`Navigator`].
 #![warn(missing_docs)]
 
 mod carmen;
+mod experiments;
+mod mission;
+mod navigator;
 mod simbench;
 mod walls;
 
 pub use carmen::*;
+pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
+pub use mission::{Corridor, DoorPassage, Mission, RoomSize, Start};
+pub use navigator::{DT_S, Navigator};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
 pub use walls::{
     ExtractorKind, MIN_REOBSERVATIONS, WallsJob, WallsReport, make_extractor, run_walls,

@@ -6,7 +6,9 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use stucco_cli::{ExtractorKind, SimbenchJob, WallsJob, run_simbench, run_walls};
+use stucco_cli::{
+    ExtractorKind, RunJob, SimbenchJob, WallsJob, run_mission, run_simbench, run_walls,
+};
 
 /// stucco: software of an autonomous spray-plastering robot.
 #[derive(Parser)]
@@ -31,6 +33,21 @@ enum Command {
         /// (the world wall map) here.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Print the report as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Run a mission in the simulator (today: the navigation experiments of
+    /// `missions/`), seeds in parallel, and report against the truth.
+    Run {
+        /// The mission file (`missions/*.toml`).
+        mission: PathBuf,
+        /// Seed of the first run, instead of the mission's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Runs per condition, instead of the mission's.
+        #[arg(long)]
+        runs: Option<u64>,
         /// Print the report as one JSON object on stdout.
         #[arg(long)]
         json: bool,
@@ -69,6 +86,45 @@ fn print_json(value: &impl serde::Serialize) -> ExitCode {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Run {
+            mission,
+            seed,
+            runs,
+            json,
+        } => match run_mission(&RunJob {
+            mission,
+            seed,
+            runs,
+        }) {
+            Ok(report) if json => print_json(&report),
+            Ok(r) => {
+                println!("{}: {} runs from seed {}", r.mission, r.runs, r.seed);
+                for c in &r.conditions {
+                    println!(
+                        "  {:>18}: lateral σ {:.1} mm (mean {:+.1}), heading σ {:.2} mrad (mean {:+.2})",
+                        c.name,
+                        c.lateral_std_m * 1e3,
+                        c.lateral_mean_m * 1e3,
+                        c.heading_std_rad * 1e3,
+                        c.heading_mean_rad * 1e3
+                    );
+                }
+                if let (Some(sd), Some(m)) = (r.room_size_std_m, r.room_size_mean_m) {
+                    println!(
+                        "  room {:.4} × {:.4} m, σ {:.1} mm; position RMS {:.1} mm",
+                        m[0],
+                        m[1],
+                        sd * 1e3,
+                        r.pose_rms_m.unwrap_or(f64::NAN) * 1e3
+                    );
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Simbench {
             world,
             seed,

@@ -1,6 +1,7 @@
 //! The robot's loop in the simulator, as the experiments close it: the
-//! encoders and the room search's walls feed the room filter, a law's
-//! command goes through the vehicle's limits, the truth stays aside.
+//! encoders and the room search's walls and doors feed the room filter, a
+//! law's command goes through the vehicle's limits, the truth stays aside
+//! (read only to score).
 
 use nalgebra::{DVector, SVector};
 use stucco_control::Limiter;
@@ -30,7 +31,12 @@ impl Navigator {
     /// The robot of `world` with `seed`, its filter starting at `x0` with
     /// a few centimetres and a degree of uncertainty on the pose and
     /// `size_sigma_m` on the room's size.
-    pub fn new(world: &WorldSpec, seed: u64, x0: RoomState, size_sigma_m: [f64; 2]) -> Self {
+    pub fn new(
+        world: &WorldSpec,
+        seed: u64,
+        x0: RoomState,
+        size_sigma_m: [f64; 2],
+    ) -> anyhow::Result<Self> {
         let cfg = SimConfig::default();
         let vehicle = cfg.vehicle.clone();
         let cfg_laser = cfg.laser.clone();
@@ -42,7 +48,7 @@ impl Navigator {
             size_sigma_m[0].powi(2),
             size_sigma_m[1].powi(2),
         ));
-        Navigator {
+        Ok(Navigator {
             sim: Simulator::new(world, cfg, Some(seed)),
             ekf: RoomEkf::new(
                 RoomEkfConfig::new(odometry.clone(), vehicle.laser_mount),
@@ -50,13 +56,13 @@ impl Navigator {
                 p0,
                 Stamp::ZERO,
             ),
-            search: RoomSearch::new(RoomConfig::default()).expect("valid room settings"),
+            search: RoomSearch::new(RoomConfig::default())?,
             limiter: Limiter::new(&vehicle),
             odometry,
             mount: vehicle.laser_mount,
             samples: Vec::new(),
             doors: DoorConfig::for_laser(&cfg_laser),
-        }
+        })
     }
 
     /// The filter's estimate now.
@@ -75,9 +81,9 @@ impl Navigator {
     }
 
     /// One control period at `speed_mps` with steering `steer_rad`;
-    /// returns the true pose after it. Panics if the robot touched
-    /// anything: an experiment's lane is kept clear.
-    pub fn step(&mut self, speed_mps: f64, steer_rad: f64) -> Pose2 {
+    /// returns the true pose after it, or `None` when the robot touched
+    /// something (an experiment's lane must be clear).
+    pub fn step(&mut self, speed_mps: f64, steer_rad: f64) -> Option<Pose2> {
         let cmd = self.limiter.limit(
             DriveCommand {
                 speed_mps,
@@ -106,7 +112,6 @@ impl Navigator {
             self.ekf.scan(scan.stamp, &walls, &doors);
         }
         let t = self.sim.truth();
-        assert!(!t.bumper, "bumped at {:?}", t.drive.pose);
-        t.drive.pose
+        (!t.bumper).then_some(t.drive.pose)
     }
 }
