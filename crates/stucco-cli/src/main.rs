@@ -108,6 +108,9 @@ fn main() -> ExitCode {
                         c.heading_std_rad * 1e3,
                         c.heading_mean_rad * 1e3
                     );
+                    if let Some(e) = c.door_estimate_rms_m {
+                        println!("  {:>18}  door estimate RMS {:.1} mm", "", e * 1e3);
+                    }
                 }
                 if let (Some(sd), Some(m)) = (r.room_size_std_m, r.room_size_mean_m) {
                     println!(
