@@ -62,6 +62,7 @@ fn room_size_learnt_on_tour_within_3_mm() {
     );
     assert!(sd <= 0.003, "σ {sd} m");
     assert!(report.pose_rms_m.unwrap() <= 0.01);
+    assert!(report.heading_rms_rad.unwrap() <= 0.3_f64.to_radians());
 }
 
 /// Every file in `missions/` parses and names a world that parses.

@@ -66,6 +66,9 @@ pub struct RunReport {
     /// RMS error of the estimated position over the tour, m (room-size
     /// missions only).
     pub pose_rms_m: Option<f64>,
+    /// RMS error of the estimated heading over the tour, rad (room-size
+    /// missions only).
+    pub heading_rms_rad: Option<f64>,
 }
 
 fn stats(v: &[f64]) -> (f64, f64) {
@@ -90,22 +93,26 @@ pub fn run_mission(job: &RunJob) -> Result<RunReport> {
         room_size_std_m: None,
         room_size_mean_m: None,
         pose_rms_m: None,
+        heading_rms_rad: None,
     };
     if let Some(d) = &mission.door_passage {
         report.conditions = door_passage(&world, d, seed, runs)?;
     } else if let Some(c) = &mission.corridor {
         report.conditions = vec![corridor(&world, c, seed, runs)?];
     } else if let Some(r) = &mission.room_size {
-        let out: Vec<([f64; 2], f64)> = (0..runs)
+        let out: Vec<RoomSizeRun> = (0..runs)
             .into_par_iter()
             .map(|k| room_size(&world, r, seed + k))
             .collect::<Result<_>>()?;
-        let (mw, sw) = stats(&out.iter().map(|o| o.0[0]).collect::<Vec<_>>());
-        let (mh, sh) = stats(&out.iter().map(|o| o.0[1]).collect::<Vec<_>>());
+        let (mw, sw) = stats(&out.iter().map(|o| o.size_m[0]).collect::<Vec<_>>());
+        let (mh, sh) = stats(&out.iter().map(|o| o.size_m[1]).collect::<Vec<_>>());
         report.room_size_std_m = Some(sw.max(sh));
         report.room_size_mean_m = Some([mw, mh]);
-        let rms = out.iter().map(|o| o.1 * o.1).sum::<f64>() / out.len() as f64;
-        report.pose_rms_m = Some(rms.sqrt());
+        let n = out.len() as f64;
+        let pos = out.iter().map(|o| o.pose_ms_m2).sum::<f64>() / n;
+        let head = out.iter().map(|o| o.heading_ms_rad2).sum::<f64>() / n;
+        report.pose_rms_m = Some(pos.sqrt());
+        report.heading_rms_rad = Some(head.sqrt());
     }
     Ok(report)
 }
@@ -301,9 +308,19 @@ fn corridor_run(
     bail!("seed {seed}: never reached x = {} m", c.score_x_m[1])
 }
 
-/// The room's size learnt after touring, and the RMS position error over
-/// the tour's second half.
-fn room_size(world: &WorldSpec, r: &RoomSize, seed: u64) -> Result<([f64; 2], f64)> {
+/// One room-size run.
+struct RoomSizeRun {
+    /// The room's size learnt by the end of the tour, m.
+    size_m: [f64; 2],
+    /// Mean squared position error over the tour's second half, m².
+    pose_ms_m2: f64,
+    /// Mean squared heading error over the tour's second half, rad².
+    heading_ms_rad2: f64,
+}
+
+/// The room's size learnt after touring, and the pose errors over the
+/// tour's second half.
+fn room_size(world: &WorldSpec, r: &RoomSize, seed: u64) -> Result<RoomSizeRun> {
     let start = Pose2::new(
         world.robot.at[0],
         world.robot.at[1],
@@ -318,7 +335,7 @@ fn room_size(world: &WorldSpec, r: &RoomSize, seed: u64) -> Result<([f64; 2], f6
     let mut driver = TourDriver::new(world.tour.clone(), r.speed_mps);
     let vehicle = stucco_sim::SimConfig::default().vehicle;
     let steps = (r.seconds / crate::navigator::DT_S).round() as usize;
-    let mut sq = Vec::new();
+    let (mut pos, mut head, mut n) = (0.0, 0.0, 0usize);
     for k in 0..steps {
         let x = nav.estimate();
         // The tour driven on the filter's estimate, not on the truth.
@@ -331,12 +348,18 @@ fn room_size(world: &WorldSpec, r: &RoomSize, seed: u64) -> Result<([f64; 2], f6
         };
         if 2 * k >= steps {
             let x = nav.estimate();
-            sq.push((x[0] - now.x).powi(2) + (x[1] - now.y).powi(2));
+            pos += (x[0] - now.x).powi(2) + (x[1] - now.y).powi(2);
+            head += wrap_angle(x[2] - now.theta).powi(2);
+            n += 1;
         }
     }
     let x = nav.estimate();
-    let rms = (sq.iter().sum::<f64>() / sq.len().max(1) as f64).sqrt();
-    Ok(([x[3], x[4]], rms))
+    let n = n.max(1) as f64;
+    Ok(RoomSizeRun {
+        size_m: [x[3], x[4]],
+        pose_ms_m2: pos / n,
+        heading_ms_rad2: head / n,
+    })
 }
 
 /// Every mission file in `dir`, parsed (for tests and `--check`).

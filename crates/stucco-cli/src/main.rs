@@ -114,11 +114,12 @@ fn main() -> ExitCode {
                 }
                 if let (Some(sd), Some(m)) = (r.room_size_std_m, r.room_size_mean_m) {
                     println!(
-                        "  room {:.4} × {:.4} m, σ {:.1} mm; position RMS {:.1} mm",
+                        "  room {:.4} × {:.4} m, σ {:.1} mm; position RMS {:.1} mm, heading RMS {:.3}°",
                         m[0],
                         m[1],
                         sd * 1e3,
-                        r.pose_rms_m.unwrap_or(f64::NAN) * 1e3
+                        r.pose_rms_m.unwrap_or(f64::NAN) * 1e3,
+                        r.heading_rms_rad.unwrap_or(f64::NAN).to_degrees()
                     );
                 }
                 ExitCode::SUCCESS
