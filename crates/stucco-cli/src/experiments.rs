@@ -209,9 +209,9 @@ fn passage(
     let mut before = nav.truth();
     for _ in 0..MAX_STEPS {
         let x = nav.estimate();
-        // The law aims at the map's door (the filter's own estimate is
-        // reported beside).
-        let Some(now) = nav.step(speed, law.steer(x[1] - door_y, x[2], speed)) else {
+        // The law aims at the filter's door, as the paper's ŷd: the map
+        // only seeds it, `door_map_error_m` off.
+        let Some(now) = nav.step(speed, law.steer(x[1] - x[door], x[2], speed)) else {
             bail!(
                 "seed {seed}: the robot touched something at {:?}",
                 nav.truth()

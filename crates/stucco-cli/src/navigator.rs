@@ -8,7 +8,7 @@ use stucco_control::Limiter;
 use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp};
 use stucco_nav::{
     DoorConfig, OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch,
-    RoomState, ScanPoints, Wall, find_doors, sensor_twist, twist_at,
+    RoomState, ScanPoints, Wall, find_doors_moving, sensor_twist, twist_at,
 };
 use stucco_sim::{SimConfig, Simulator, WorldSpec};
 
@@ -108,7 +108,7 @@ impl Navigator {
                 .find(&pts)
                 .map(|room| room.walls.into_iter().flatten().collect())
                 .unwrap_or_default();
-            let doors = find_doors(scan, &walls, &self.doors);
+            let doors = find_doors_moving(scan, &twist, &walls, &self.doors);
             self.ekf.scan(scan.stamp, &walls, &doors);
         }
         let t = self.sim.truth();

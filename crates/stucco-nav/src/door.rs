@@ -21,7 +21,7 @@
 use crate::wall::Wall;
 use nalgebra::{Matrix2, Point2, Vector2};
 use serde::{Deserialize, Serialize};
-use stucco_core::{BeamWidth, LaserSpec, Scan};
+use stucco_core::{BeamWidth, LaserSpec, Scan, Twist2};
 
 /// Settings of door detection.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -127,11 +127,35 @@ struct Crossing {
     class: Hit,
     /// Range to the wall line along the beam, m.
     r_wall: f64,
+    /// Cosine of the beam's incidence on the wall.
+    cos_inc: f64,
 }
 
 /// Open doors in the walls of `scan`, each reported once (on the wall that
 /// rests on the most measurements when walls overlap).
 pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpening> {
+    find_doors_moving(scan, &Twist2::default(), walls, cfg)
+}
+
+/// [`find_doors`] for a laser moving with `twist` (its own frame) during
+/// the sweep, with `walls` in its frame at the scan's stamp (as the walls
+/// found in deskewed points are): each beam is cast from where the laser
+/// was when it fired. At 0.8 m/s an IBEO sweep moves the laser 10 cm; a
+/// door's frames read from the raw beams would move with it.
+pub fn find_doors_moving(
+    scan: &Scan,
+    twist: &Twist2,
+    walls: &[Wall],
+    cfg: &DoorConfig,
+) -> Vec<DoorOpening> {
+    // Each beam's origin and direction in the frame at the stamp.
+    let beams: Vec<(Vector2<f64>, Vector2<f64>)> = (0..scan.len())
+        .map(|i| {
+            let at = twist.displacement(scan.beam_time_s(i));
+            let phi = scan.angle(i) + at.theta;
+            (Vector2::new(at.x, at.y), Vector2::new(phi.cos(), phi.sin()))
+        })
+        .collect();
     let mut doors = Vec::new();
     let gate = 3.0 * cfg.range_sigma_m;
     let mut run: Vec<Crossing> = Vec::new();
@@ -152,16 +176,16 @@ pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpen
             scan_run(run, wi, wall, cfg, doors);
             run.clear();
         };
-        for i in 0..scan.len() {
-            let phi = scan.angle(i);
-            let dir = Vector2::new(phi.cos(), phi.sin());
+        for (i, (origin, dir)) in beams.iter().enumerate() {
             let c = dir.dot(&n);
-            if c < 0.05 {
+            // Distance from where the beam starts to the wall's line.
+            let to_line = wall.d_m - n.dot(origin);
+            if c < 0.05 || to_line <= 0.0 {
                 flush(&mut run, &mut doors);
                 continue;
             }
-            let r_wall = wall.d_m / c;
-            let t_cross = u.dot(&(dir * r_wall));
+            let r_wall = to_line / c;
+            let t_cross = u.dot(&(origin + dir * r_wall));
             if t_cross < t_lo || t_cross > t_hi {
                 flush(&mut run, &mut doors);
                 continue;
@@ -178,7 +202,7 @@ pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpen
                 Hit::Through
             };
             let t_echo = if r.is_finite() {
-                u.dot(&(dir * r))
+                u.dot(&(origin + dir * r))
             } else {
                 t_cross
             };
@@ -187,6 +211,7 @@ pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpen
                 t_echo,
                 class,
                 r_wall,
+                cos_inc: c,
             });
         }
         flush(&mut run, &mut doors);
@@ -292,7 +317,7 @@ fn opening_between(
     // front of it (a radiator), not a jamb: no door there.
     let max_jamb_spread = 0.1f64.max(4.0 * cfg.range_sigma_m);
     let frame = |solid: &Crossing, jambs: &[Crossing], next: &Crossing| {
-        let cos_inc = wall.d_m / solid.r_wall;
+        let cos_inc = solid.cos_inc;
         if jambs.is_empty() {
             // The edge lies between the last echo on the wall and where the
             // next beam would have met it: half a step on. (The next beam's

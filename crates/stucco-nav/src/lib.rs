@@ -11,7 +11,7 @@
 //!   [`RansacExtractor`] is the baseline of the sensor-precision paper.
 //! - [`RoomSearch`]: the four walls of a rectangular room as one group of
 //!   peaks 90° apart, and the room's orientation.
-//! - [`find_doors`]: open doors as runs of beams beyond a wall.
+//! - [`find_doors`]: open doors as runs of beams beyond a wall ([`find_doors_moving`] for a laser moving during its sweep).
 //! - [`DeadReckoning`]: the tricycle's pose from its rear-wheel encoders,
 //!   as a [`Displacement`] with covariance since the last scan.
 //! - [`RoomEkf`]: the robot's pose and the room's size in an EKF fed by the
@@ -50,7 +50,7 @@ mod rwht;
 pub mod synthetic;
 mod wall;
 
-pub use door::{DoorConfig, DoorOpening, find_doors};
+pub use door::{DoorConfig, DoorOpening, find_doors, find_doors_moving};
 pub use error::NavError;
 pub use extractor::WallExtractor;
 pub use hough::{HoughConfig, HoughTransform, Weighting};
