@@ -137,6 +137,10 @@ pub struct HoughTransform {
     /// Running sums of x, y, x², xy, y² over the measurements, for the
     /// surface around each one.
     sums: Vec<[f64; 5]>,
+    /// The distance bins each row received votes in, `lo..hi` (empty when
+    /// none): the rest of the row is zero, and neither the running sum nor
+    /// the peak search need visit it.
+    voted: Vec<(usize, usize)>,
 }
 
 impl HoughTransform {
@@ -154,6 +158,7 @@ impl HoughTransform {
             acc: Vec::new(),
             gates: Vec::new(),
             sums: Vec::new(),
+            voted: Vec::new(),
         })
     }
 
@@ -192,6 +197,13 @@ impl HoughTransform {
         &self.acc[k * self.distance_bins..(k + 1) * self.distance_bins]
     }
 
+    /// The distance bins of row `k` that hold votes, `lo..hi`; the row is
+    /// zero outside them.
+    pub fn voted(&self, k: usize) -> std::ops::Range<usize> {
+        let (lo, hi) = self.voted[k];
+        lo..hi
+    }
+
     /// True when `p` is used at all (inside the range limit).
     pub fn uses(&self, p: &ScanPoint) -> bool {
         p.range_m <= self.config.max_range_m
@@ -209,6 +221,8 @@ impl HoughTransform {
         self.acc.clear();
         self.acc.resize(self.distance_bins * cfg.angle_bins, 0.0);
         let n = cfg.angle_bins;
+        self.voted.clear();
+        self.voted.resize(n, (usize::MAX, 0));
         self.gate(pts);
         for p in pts {
             if !self.uses(p) {
@@ -221,6 +235,8 @@ impl HoughTransform {
                     let row = &mut self.acc[k * self.distance_bins..(k + 1) * self.distance_bins];
                     row[lo] += g as f32;
                     row[hi + 1] -= g as f32;
+                    let v = &mut self.voted[k];
+                    *v = (v.0.min(lo), v.1.max(hi + 1));
                 }
                 k += 1;
                 if k == n {
@@ -229,12 +245,19 @@ impl HoughTransform {
             }
         }
         let m = self.distance_bins;
-        for row in self.acc.chunks_exact_mut(m) {
+        for (row, voted) in self.acc.chunks_exact_mut(m).zip(&mut self.voted) {
+            if voted.0 >= voted.1 {
+                *voted = (0, 0);
+                continue;
+            }
             let mut run = 0.0f32;
-            for cell in row.iter_mut() {
+            for cell in &mut row[voted.0..voted.1] {
                 run += *cell;
                 *cell = run;
             }
+            // Past the last vote the sum is back to nothing (the f32
+            // remainder of adding and taking the same weights is dropped).
+            row[voted.1] = 0.0;
         }
     }
 

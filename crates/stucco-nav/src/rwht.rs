@@ -109,7 +109,8 @@ impl RwhtExtractor {
             let row = h.row(k);
             let prev = h.row((k + n - 1) % n);
             let next = h.row((k + 1) % n);
-            for j in 0..m {
+            // Cells without votes are zero, under any threshold.
+            for j in h.voted(k) {
                 let v = row[j];
                 if f64::from(v) < threshold {
                     continue;
