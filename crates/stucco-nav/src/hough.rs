@@ -294,9 +294,10 @@ impl HoughTransform {
 
     /// The bins the normal of the surface around measurement `i` can fall
     /// in, when the measurements spanning `SURFACE_SPAN_M` of it across
-    /// the beams lie on a line within the noise.
+    /// the beams lie on a line within the noise: centred on it, or, at the
+    /// end of a surface (a corner, a door's frame, a person in front), on
+    /// the side where the surface goes on.
     fn surface_gate(&self, pts: &[ScanPoint], i: usize, step: f64) -> Option<(u16, u16)> {
-        let n = self.config.angle_bins;
         let p = &pts[i];
         let beam_step = if i > 0 {
             (p.bearing_rad - pts[i - 1].bearing_rad).abs()
@@ -305,7 +306,32 @@ impl HoughTransform {
         }
         .max(1e-6);
         let k = ((SURFACE_SPAN_M / 2.0 / (p.range_m * beam_step)).ceil() as usize).clamp(2, 64);
-        let (a, b) = (i.checked_sub(k)?, i + k);
+        // Last, a short centred window: a round thing (a person, a post)
+        // is flat over a few centimetres and votes only for its tangents.
+        let short = (k / 3).max(2);
+        [
+            i.checked_sub(k).map(|a| (a, i + k)),
+            i.checked_sub(2 * k).map(|a| (a, i)),
+            Some((i, i + 2 * k)),
+            i.checked_sub(short).map(|a| (a, i + short)),
+        ]
+        .into_iter()
+        .flatten()
+        .find_map(|(a, b)| self.window_gate(pts, i, a, b, step))
+    }
+
+    /// The gate of measurement `i` from the line through measurements
+    /// `a..=b`, when they are consecutive beams on a line within the noise
+    /// and `i` lies on it.
+    fn window_gate(
+        &self,
+        pts: &[ScanPoint],
+        i: usize,
+        a: usize,
+        b: usize,
+        step: f64,
+    ) -> Option<(u16, u16)> {
+        let n = self.config.angle_bins;
         let q = pts.get(b)?;
         // Consecutive beams only: a gap is an edge or a no-return.
         if q.beam - pts[a].beam != b - a {
@@ -330,7 +356,13 @@ impl HoughTransform {
         // sensor.
         let axis = 0.5 * (2.0 * vxy).atan2(vxx - vyy);
         let mut gamma = axis + PI / 2.0;
-        if gamma.cos() * cx + gamma.sin() * cy < 0.0 {
+        let (sg, cg) = gamma.sin_cos();
+        // The measurement itself on the line (a window may end on it).
+        let p = &pts[i].p;
+        if (cg * (p.x - cx) + sg * (p.y - cy)).abs() > 3.0 * noise {
+            return None;
+        }
+        if cg * cx + sg * cy < 0.0 {
             gamma += PI;
         }
         // Its uncertainty: the noise over the spread of the window along the
