@@ -114,6 +114,8 @@ pub struct RoomSearch {
     config: RoomConfig,
     hough: HoughTransform,
     hist: Vec<f64>,
+    /// The orientation search's two histograms, all zero between uses.
+    align_hist: Vec<f64>,
 }
 
 impl RoomSearch {
@@ -123,6 +125,7 @@ impl RoomSearch {
             hough: HoughTransform::new(config.hough.clone())?,
             config,
             hist: Vec::new(),
+            align_hist: Vec::new(),
         })
     }
 
@@ -134,7 +137,10 @@ impl RoomSearch {
         let n = self.hough.angle_bins();
         let quarter = n / 4;
         let row_max: Vec<f64> = (0..n)
-            .map(|k| f64::from(self.hough.row(k).iter().copied().fold(0.0f32, f32::max)))
+            .map(|k| {
+                let row = &self.hough.row(k)[self.hough.voted(k)];
+                f64::from(row.iter().copied().fold(0.0f32, f32::max))
+            })
             .collect();
         let (g0, score) = (0..quarter)
             .map(|g| (g, (0..4).map(|q| row_max[g + q * quarter]).sum::<f64>()))
@@ -186,15 +192,30 @@ impl RoomSearch {
         let (s, c) = theta.sin_cos();
         let reach = pts.iter().fold(0.0f64, |m, p| m.max(p.range_m));
         let bins = (2.0 * reach / BIN_M) as usize + 2;
-        self.hist.clear();
-        self.hist.resize(2 * bins, 0.0);
+        // The histogram is left zeroed after each use: only the bins the
+        // points fill are visited, and the sum of squares grows as they do
+        // ((v + w)² − v² = w·(2v + w)).
+        if self.align_hist.len() < 2 * bins {
+            self.align_hist.clear();
+            self.align_hist.resize(2 * bins, 0.0);
+        }
         let bin = |rho: f64| (((rho + reach) / BIN_M) as usize).min(bins - 1);
+        let mut squares = 0.0;
         for p in pts {
             let (x, y) = (p.p.x, p.p.y);
-            self.hist[bin(c * x + s * y)] += p.range_m;
-            self.hist[bins + bin(-s * x + c * y)] += p.range_m;
+            let w = p.range_m;
+            for b in [bin(c * x + s * y), bins + bin(-s * x + c * y)] {
+                let v = &mut self.align_hist[b];
+                squares += w * (2.0 * *v + w);
+                *v += w;
+            }
         }
-        self.hist.iter().map(|v| v * v).sum()
+        for p in pts {
+            let (x, y) = (p.p.x, p.p.y);
+            self.align_hist[bin(c * x + s * y)] = 0.0;
+            self.align_hist[bins + bin(-s * x + c * y)] = 0.0;
+        }
+        squares
     }
 
     /// The wall along normal direction `gamma`: of the modes of the
@@ -356,10 +377,25 @@ fn normal(gamma: f64) -> Vector2<f64> {
 /// Tukey location of the measurements' distances along `n`, from `d`.
 fn tukey_location(pts: &[ScanPoint], n: &Vector2<f64>, mut d: f64, sigma: f64) -> f64 {
     let c = TUKEY_SIGMAS * sigma;
+    // The distances within reach of the start, taken again only if the
+    // location walks out of that reach: the same sums over far fewer
+    // measurements.
+    let reach = 4.0 * c;
+    let near = |d: f64| -> Vec<f64> {
+        pts.iter()
+            .map(|p| n.dot(&p.p.coords))
+            .filter(|rho| (rho - d).abs() < reach)
+            .collect()
+    };
+    let mut from = d;
+    let mut rhos = near(d);
     for _ in 0..10 {
+        if (d - from).abs() > reach - c {
+            from = d;
+            rhos = near(d);
+        }
         let (mut sw, mut sd) = (0.0, 0.0);
-        for p in pts {
-            let rho = n.dot(&p.p.coords);
+        for &rho in &rhos {
             let u = (rho - d) / c;
             if u.abs() < 1.0 {
                 let w = (1.0 - u * u).powi(2);
