@@ -149,11 +149,20 @@ impl RoomSearch {
             return None;
         }
         let centre = self.hough.gamma(g0);
-        let mut theta = (-ORIENTATION_STEPS..=ORIENTATION_STEPS)
-            .map(|i| centre + f64::from(i) * ORIENTATION_STEP_RAD)
-            .map(|t| (t, self.alignment(pts, t)))
-            .max_by(|a, b| a.1.total_cmp(&b.1))?
-            .0;
+        // Every other step first, then the steps either side of the best:
+        // a wall's measurements stay within a few bins over two steps, so
+        // the best of the coarse pass is next to the best of all.
+        let at = |i: i32| centre + f64::from(i) * ORIENTATION_STEP_RAD;
+        let (coarse, _) = (-ORIENTATION_STEPS..=ORIENTATION_STEPS)
+            .step_by(2)
+            .map(|i| (i, self.alignment(pts, at(i))))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        let (best, _) = [coarse - 1, coarse, coarse + 1]
+            .into_iter()
+            .filter(|i| i.abs() <= ORIENTATION_STEPS)
+            .map(|i| (i, self.alignment(pts, at(i))))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        let mut theta = at(best);
         let sigma = self.config.fit.noise_sigma_m;
         let mut d: [Option<f64>; 4] =
             std::array::from_fn(|q| self.wall_distance(pts, theta + q as f64 * FRAC_PI_2, step));
