@@ -61,6 +61,12 @@ pub(crate) struct LineFitter {
     candidates: Vec<usize>,
     weights: Vec<f64>,
     along: Vec<(f64, usize)>,
+    /// The measurements not taken within `cut + margin` of `pool_line`:
+    /// while the fit's line stays within `margin` of it over the scan's
+    /// reach, every measurement within `cut` of the line is among them.
+    pool: Vec<usize>,
+    pool_line: Option<Line>,
+    reach_m: f64,
 }
 
 /// A line in normal form, `n(γ)·p = d`, with its normal at hand.
@@ -112,6 +118,8 @@ impl LineFitter {
         self.candidates.clear();
         self.candidates
             .extend((0..pts.len()).filter(|&i| !taken[i] && in_seed(&pts[i])));
+        self.pool_line = None;
+        self.reach_m = pts.iter().fold(0.0, |m, p| m.max(p.range_m));
         if self.candidates.len() < cfg.min_points {
             return None;
         }
@@ -157,9 +165,25 @@ impl LineFitter {
         within_run: bool,
     ) {
         if !within_run {
+            let margin = cut;
+            let stale = self.pool_line.is_none_or(|r| {
+                (line.d - r.d).abs() + wrap_angle(line.gamma - r.gamma).abs() * self.reach_m
+                    > margin
+            });
+            if stale {
+                self.pool.clear();
+                self.pool.extend(
+                    (0..pts.len())
+                        .filter(|&i| !taken[i] && line.residual(&pts[i].p).abs() < cut + margin),
+                );
+                self.pool_line = Some(line);
+            }
             self.candidates.clear();
             self.candidates.extend(
-                (0..pts.len()).filter(|&i| !taken[i] && line.residual(&pts[i].p).abs() < cut),
+                self.pool
+                    .iter()
+                    .copied()
+                    .filter(|&i| line.residual(&pts[i].p).abs() < cut),
             );
         } else {
             self.candidates
