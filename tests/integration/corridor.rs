@@ -89,3 +89,35 @@ fn a_malformed_mission_names_file_line_and_key() {
         "{err}"
     );
 }
+
+/// Values out of range are refused with the file, the line and the key,
+/// and so is `--runs 0`.
+#[test]
+fn a_mission_out_of_range_names_file_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.toml");
+    let door = "name = \"x\"\nworld = \"w.toml\"\nseed = 1\n\n[door_passage]\nroom_m = [5.0, 5.0]\ndoor_m = [5.0, 2.5]\nspeeds_mps = [0.2, -0.5]\n\n[[door_passage.start]]\nname = \"easy\"\nat = [2.0, 2.0]\nheading_deg = 0.0\n";
+    std::fs::write(&path, door).unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:8") && err.contains("speeds_mps"),
+        "{err}"
+    );
+    let corridor = "name = \"x\"\nworld = \"w.toml\"\nseed = 1\n\n[corridor]\nroom_m = [19.5, 2.1]\nspeed_mps = 0.8\nscore_x_m = [16.0, 6.0]\n\n[corridor.start]\nname = \"west\"\nat = [1.5, 1.0]\nheading_deg = 0.0\n";
+    std::fs::write(&path, corridor).unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:8") && err.contains("score_x_m"),
+        "{err}"
+    );
+    let err = run_mission(&RunJob {
+        mission: PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../missions/corridor.toml"
+        )),
+        seed: None,
+        runs: Some(0),
+    })
+    .unwrap_err();
+    assert!(format!("{err:#}").contains("runs"), "{err:#}");
+}

@@ -85,6 +85,9 @@ pub fn run_mission(job: &RunJob) -> Result<RunReport> {
         .with_context(|| format!("the world of {}", job.mission.display()))?;
     let seed = job.seed.unwrap_or(mission.seed);
     let runs = job.runs.unwrap_or(mission.runs);
+    if runs == 0 {
+        bail!("{}: runs: at least one", job.mission.display());
+    }
     let mut report = RunReport {
         mission: mission.name.clone(),
         seed,

@@ -119,9 +119,69 @@ impl Mission {
             );
         }
         if mission.runs == 0 {
-            bail!("{}: runs: at least one", path.display());
+            bail!(
+                "{}:{}: runs: at least one",
+                path.display(),
+                line_of(&text, "", "runs")
+            );
+        }
+        if let Some((table, key, why)) = mission.invalid() {
+            bail!(
+                "{}:{}: [{table}] {key}: {why}",
+                path.display(),
+                line_of(&text, table, key)
+            );
         }
         Ok(mission)
+    }
+
+    /// The first value out of its range: its table, its key and why.
+    fn invalid(&self) -> Option<(&'static str, &'static str, &'static str)> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let size = |r: &[f64; 2]| r.iter().all(|&v| positive(v));
+        if let Some(d) = &self.door_passage {
+            let t = "door_passage";
+            if !size(&d.room_m) {
+                return Some((t, "room_m", "sides must be positive"));
+            }
+            if d.speeds_mps.is_empty() || !d.speeds_mps.iter().all(|&v| positive(v)) {
+                return Some((t, "speeds_mps", "at least one speed, each positive"));
+            }
+            if d.start.is_empty() {
+                return Some((t, "start", "at least one [[door_passage.start]]"));
+            }
+            if !d.door_map_error_m.is_finite() {
+                return Some((t, "door_map_error_m", "must be a number"));
+            }
+        }
+        if let Some(c) = &self.corridor {
+            let t = "corridor";
+            if !size(&c.room_m) {
+                return Some((t, "room_m", "sides must be positive"));
+            }
+            if !positive(c.speed_mps) {
+                return Some((t, "speed_mps", "must be positive"));
+            }
+            if c.score_x_m[0].partial_cmp(&c.score_x_m[1]) != Some(std::cmp::Ordering::Less) {
+                return Some((t, "score_x_m", "the stretch must run forward"));
+            }
+        }
+        if let Some(r) = &self.room_size {
+            let t = "room_size";
+            if !size(&r.room_m) {
+                return Some((t, "room_m", "sides must be positive"));
+            }
+            if !(r.room_sigma_m.is_finite() && r.room_sigma_m >= 0.0) {
+                return Some((t, "room_sigma_m", "must not be negative"));
+            }
+            if !positive(r.seconds) {
+                return Some((t, "seconds", "must be positive"));
+            }
+            if !positive(r.speed_mps) {
+                return Some((t, "speed_mps", "must be positive"));
+            }
+        }
+        None
     }
 
     /// The world file, resolved against the mission file's folder.
@@ -130,4 +190,31 @@ impl Mission {
             .parent()
             .map_or_else(|| self.world.clone(), |d| d.join(&self.world))
     }
+}
+
+/// The line of `key` in `table` (`""`: the top level; its sub-tables count
+/// as inside it), or of the table's header when the key is not written
+/// there; 0 when neither is.
+fn line_of(text: &str, table: &str, key: &str) -> usize {
+    let mut current = String::new();
+    let mut header = 0;
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.starts_with('[') {
+            current = line
+                .trim_matches(|c| c == '[' || c == ']')
+                .trim()
+                .to_owned();
+            if current == table {
+                header = i + 1;
+            }
+            continue;
+        }
+        let inside = current == table || current.starts_with(&format!("{table}."));
+        let written = line.split_once('=').is_some_and(|(k, _)| k.trim() == key);
+        if inside && written {
+            return i + 1;
+        }
+    }
+    header
 }
