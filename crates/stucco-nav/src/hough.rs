@@ -137,6 +137,9 @@ pub struct HoughTransform {
     /// Running sums of x, y, x², xy, y² over the measurements, for the
     /// surface around each one.
     sums: Vec<[f64; 5]>,
+    /// Each row's votes in measurement order: the measurement's index and
+    /// the distance bins `lo..=hi` it voted for.
+    row_votes: Vec<Vec<(u32, u32, u32)>>,
     /// The distance bins each row received votes in, `lo..hi` (empty when
     /// none): the rest of the row is zero, and neither the running sum nor
     /// the peak search need visit it.
@@ -158,6 +161,7 @@ impl HoughTransform {
             acc: Vec::new(),
             gates: Vec::new(),
             sums: Vec::new(),
+            row_votes: vec![Vec::new(); n],
             voted: Vec::new(),
         })
     }
@@ -224,7 +228,8 @@ impl HoughTransform {
         self.voted.clear();
         self.voted.resize(n, (usize::MAX, 0));
         self.gate(pts);
-        for p in pts {
+        self.row_votes.iter_mut().for_each(Vec::clear);
+        for (i, p) in pts.iter().enumerate() {
             if !self.uses(p) {
                 continue;
             }
@@ -235,6 +240,9 @@ impl HoughTransform {
                     let row = &mut self.acc[k * self.distance_bins..(k + 1) * self.distance_bins];
                     row[lo] += g as f32;
                     row[hi + 1] -= g as f32;
+                    if g > 0.0 {
+                        self.row_votes[k].push((i as u32, lo as u32, hi as u32));
+                    }
                     let v = &mut self.voted[k];
                     *v = (v.0.min(lo), v.1.max(hi + 1));
                 }
@@ -433,6 +441,17 @@ impl HoughTransform {
         (k + n - usize::from(first)) % n < usize::from(count)
     }
 
+    /// The measurements of the last transform (indices into its points,
+    /// in order) that vote for cell `(k, j)`: the same as
+    /// [`HoughTransform::votes_for`] picks, from the row's own votes.
+    pub fn voters(&self, k: usize, j: usize) -> impl Iterator<Item = usize> + '_ {
+        let j = j as u32;
+        self.row_votes[k]
+            .iter()
+            .filter(move |&&(_, lo, hi)| lo <= j && j <= hi)
+            .map(|&(i, _, _)| i as usize)
+    }
+
     /// True when `p` votes for cell `(k, j)`: some line of the cell passes
     /// within the window of it.
     pub fn votes_for(&self, p: &ScanPoint, k: usize, j: usize) -> bool {
@@ -542,6 +561,34 @@ mod tests {
             total(&gated),
             total(&full)
         );
+    }
+
+    #[test]
+    fn a_cells_voters_are_the_measurements_that_vote_for_it() {
+        // A wall, a corner and a post: gated and ungated measurements.
+        let mut pts: Vec<ScanPoint> = (0..40)
+            .map(|i| point(2.0, -1.0 + 0.05 * i as f64))
+            .chain((0..20).map(|i| point(2.0 - 0.05 * i as f64, 1.0)))
+            .chain(
+                (0..6).map(|i| point(1.0 + 0.02 * (i as f64 * 0.8).cos(), -1.5 + 0.02 * i as f64)),
+            )
+            .collect();
+        for (i, p) in pts.iter_mut().enumerate() {
+            p.beam = i;
+        }
+        let mut t = HoughTransform::new(HoughConfig::default()).expect("valid");
+        t.compute(&pts);
+        let mut cells = 0;
+        for k in 0..t.angle_bins() {
+            for j in 0..t.distance_bins() {
+                let want: Vec<usize> = (0..pts.len())
+                    .filter(|&i| t.votes_for(&pts[i], k, j))
+                    .collect();
+                assert_eq!(t.voters(k, j).collect::<Vec<_>>(), want, "cell ({k}, {j})");
+                cells += usize::from(!want.is_empty());
+            }
+        }
+        assert!(cells > 100, "{cells} cells voted for");
     }
 
     #[test]

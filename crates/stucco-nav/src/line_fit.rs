@@ -104,20 +104,20 @@ impl LineFitter {
     }
 
     /// Refines a line hypothesis on the points not yet `taken`: a first
-    /// total-least-squares fit on the points `in_seed` accepts (a Hough
-    /// cell's voters, a RANSAC hypothesis' supporters), then Tukey
+    /// total-least-squares fit on the `seeds` (indices, in scan order: a
+    /// Hough cell's voters, a RANSAC hypothesis' supporters), then Tukey
     /// reweighting around it.
     pub fn fit(
         &mut self,
         pts: &[ScanPoint],
         taken: &[bool],
-        in_seed: impl Fn(&ScanPoint) -> bool,
+        seeds: impl IntoIterator<Item = usize>,
     ) -> Option<LineFit> {
         let cfg = self.config.clone();
         let cut = cfg.tukey_c * cfg.noise_sigma_m;
         self.candidates.clear();
         self.candidates
-            .extend((0..pts.len()).filter(|&i| !taken[i] && in_seed(&pts[i])));
+            .extend(seeds.into_iter().filter(|&i| !taken[i]));
         self.pool_line = None;
         self.reach_m = pts.iter().fold(0.0, |m, p| m.max(p.range_m));
         if self.candidates.len() < cfg.min_points {

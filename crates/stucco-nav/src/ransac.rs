@@ -153,7 +153,8 @@ impl WallExtractor for RansacExtractor {
             }
             let thr = self.config.inlier_threshold_m;
             let supports = |p: &ScanPoint| line.residual(&p.p).abs() < thr;
-            match self.fitter.fit(pts, &self.taken, supports) {
+            let seeds = (0..pts.len()).filter(|&i| supports(&pts[i]));
+            match self.fitter.fit(pts, &self.taken, seeds) {
                 Some(fit) => {
                     for &i in &fit.support {
                         self.taken[i] = true;

@@ -66,6 +66,9 @@ pub struct RwhtExtractor {
     candidates: Vec<Candidate>,
     /// The measurements not yet taken by a wall, for later passes.
     left: Vec<ScanPoint>,
+    /// Where each measurement the transform was computed on sits in the
+    /// scan.
+    in_scan: Vec<usize>,
 }
 
 impl RwhtExtractor {
@@ -80,6 +83,7 @@ impl RwhtExtractor {
             taken: Vec::new(),
             candidates: Vec::new(),
             left: Vec::new(),
+            in_scan: Vec::new(),
         })
     }
 
@@ -160,16 +164,15 @@ impl WallExtractor for RwhtExtractor {
         // until that peak's measurements are gone: when the peaks of one
         // transform are used up, transform what is left and search again.
         for pass in 0..self.config.max_passes {
+            self.in_scan.clear();
             if pass == 0 {
+                self.in_scan.extend(0..pts.len());
                 self.hough.compute(pts);
             } else {
+                self.in_scan
+                    .extend((0..pts.len()).filter(|&i| !self.taken[i]));
                 self.left.clear();
-                self.left.extend(
-                    pts.iter()
-                        .zip(&self.taken)
-                        .filter(|(_, t)| !**t)
-                        .map(|(p, _)| *p),
-                );
+                self.left.extend(self.in_scan.iter().map(|&i| pts[i]));
                 self.hough.compute(&self.left);
             }
             self.find_candidates(threshold);
@@ -200,11 +203,9 @@ impl RwhtExtractor {
             };
             let Candidate { k, j, .. } = self.candidates[best];
             self.candidates[best].alive = false;
-            let hough = &self.hough;
-            let Some(fit) = self
-                .fitter
-                .fit(pts, &self.taken, |p| hough.votes_for(p, k, j))
-            else {
+            let in_scan = &self.in_scan;
+            let seeds = self.hough.voters(k, j).map(|i| in_scan[i]);
+            let Some(fit) = self.fitter.fit(pts, &self.taken, seeds) else {
                 continue;
             };
             for &i in &fit.support {
