@@ -50,3 +50,29 @@ fn table_iii(runs: u64) {
 fn door_passage_table_iii() {
     table_iii(20);
 }
+
+/// A door passage aimed where the world has no open door is refused, not
+/// scored against nothing.
+#[test]
+fn a_door_passage_without_a_door_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("nodoor.toml");
+    let world = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../sim/worlds/reference-room.toml"
+    );
+    std::fs::write(
+        &path,
+        format!(
+            "name = \"x\"\nworld = \"{world}\"\nseed = 1\nruns = 1\n\n[door_passage]\nroom_m = [5.35, 5.75]\ndoor_m = [5.45, 4.5]\nspeeds_mps = [0.5]\n\n[[door_passage.start]]\nname = \"easy\"\nat = [2.45, 4.5]\nheading_deg = 0.0\n"
+        ),
+    )
+    .unwrap();
+    let err = run_mission(&RunJob {
+        mission: path,
+        seed: None,
+        runs: None,
+    })
+    .unwrap_err();
+    assert!(format!("{err:#}").contains("door_m"), "{err:#}");
+}

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use stucco_control::{GainSchedule, LineFollower};
 use stucco_core::{Pose2, wrap_angle};
 use stucco_nav::RoomState;
-use stucco_sim::{TourDriver, WorldSpec};
+use stucco_sim::{Layout, OpeningKind, TourDriver, WorldSpec};
 
 /// Control periods an experiment may take before it is called stuck.
 const MAX_STEPS: usize = 6000;
@@ -161,6 +161,7 @@ fn door_passage(
     seed: u64,
     runs: u64,
 ) -> Result<Vec<ConditionReport>> {
+    let truth = true_door(world, d.door_m)?;
     let mut out = Vec::new();
     for &speed in &d.speeds_mps {
         for s in &d.start {
@@ -174,7 +175,7 @@ fn door_passage(
             let w = world_for(world, &start, lane);
             let results: Vec<(f64, f64, f64)> = (0..runs)
                 .into_par_iter()
-                .map(|k| passage(&w, d, &start, speed, seed + k))
+                .map(|k| passage(&w, d, truth, &start, speed, seed + k))
                 .collect::<Result<_>>()?;
             let (ml, sl) = stats(&results.iter().map(|r| r.0).collect::<Vec<_>>());
             let (mh, sh) = stats(&results.iter().map(|r| r.1).collect::<Vec<_>>());
@@ -195,19 +196,41 @@ fn door_passage(
     Ok(out)
 }
 
+/// The centre of the world's open door nearest the mission's `door_m`:
+/// the passage is scored against the door as built.
+fn true_door(world: &WorldSpec, door_m: [f64; 2]) -> Result<[f64; 2]> {
+    let near = Layout::of(world)
+        .openings
+        .iter()
+        .filter(|o| o.kind == OpeningKind::OpenDoor)
+        .map(|o| {
+            let c = nalgebra::center(&o.edges[0], &o.edges[1]);
+            [c.x, c.y]
+        })
+        .min_by(|a, b| {
+            let dist = |c: &[f64; 2]| (c[0] - door_m[0]).hypot(c[1] - door_m[1]);
+            dist(a).total_cmp(&dist(b))
+        });
+    match near {
+        Some(c) if (c[0] - door_m[0]).hypot(c[1] - door_m[1]) <= 0.3 => Ok(c),
+        _ => bail!("door_passage.door_m {door_m:?}: no open door of the world within 0.3 m of it"),
+    }
+}
+
 /// One passage: lateral offset and heading of the rear axle as it crosses
-/// the door plane (from the truth), and the door estimate's error then.
+/// the true door's plane (from the truth), and the door estimate's error
+/// then.
 fn passage(
     world: &WorldSpec,
     d: &DoorPassage,
+    [door_x, door_y]: [f64; 2],
     start: &Pose2,
     speed: f64,
     seed: u64,
 ) -> Result<(f64, f64, f64)> {
-    let [door_x, door_y] = d.door_m;
     let mut nav = Navigator::new(world, seed, start_state(start, d.room_m), [0.2, 0.2])?;
     // The map's door, `door_map_error_m` off: the filter places it.
-    let door = nav.add_door(2, door_y - d.door_map_error_m, 0.1);
+    let door = nav.add_door(2, d.door_m[1] - d.door_map_error_m, 0.1);
     let law = LineFollower::new(GainSchedule::default());
     let mut before = nav.truth();
     for _ in 0..MAX_STEPS {

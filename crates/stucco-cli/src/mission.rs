@@ -38,7 +38,9 @@ fn one() -> u64 {
 pub struct DoorPassage {
     /// The room's size as a map gives it, m (the filter refines it).
     pub room_m: [f64; 2],
-    /// The door's centre, m: on the wall `x = xs`.
+    /// The door's centre as the map gives it, m: on the wall `x = xs`.
+    /// The passage is scored against the world's open door nearest it
+    /// (there must be one within 0.3 m).
     pub door_m: [f64; 2],
     /// How far off the map's door is, m (the filter places it).
     #[serde(default)]
