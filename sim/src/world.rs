@@ -254,7 +254,7 @@ impl WorldSpec {
         let world: WorldSpec = toml::from_str(text).map_err(|e| {
             let (line, column) = e
                 .span()
-                .map(|s| line_column(text, s.start))
+                .map(|s| stucco_core::line_column(text, s.start))
                 .unwrap_or((0, 0));
             SimError::Syntax {
                 origin: origin.to_owned(),
@@ -354,14 +354,6 @@ fn signed_area(c: &[[f64; 2]]) -> f64 {
             a[0] * b[1] - b[0] * a[1]
         })
         .sum()
-}
-
-/// 1-based line and column of byte `offset` in `text`.
-fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-    (line, column)
 }
 
 /// The line of the table `field` names (`door[2].wall` → the third

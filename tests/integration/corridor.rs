@@ -6,19 +6,10 @@
 //! σ ≤ 5 mm.
 
 use std::path::PathBuf;
-use stucco_cli::{RunJob, run_mission};
 
 #[test]
 fn corridor_centring_at_08_mps_within_5_mm() {
-    let report = run_mission(&RunJob {
-        mission: PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../missions/corridor.toml"
-        )),
-        seed: None,
-        runs: None,
-    })
-    .unwrap();
+    let report = crate::run_mission_file("corridor", None).unwrap();
     let c = &report.conditions[0];
     println!(
         "corridor at 0.8 m/s: lateral σ {:.1} mm, mean {:+.1} mm, heading σ {:.2} mrad over {} runs",
@@ -40,15 +31,7 @@ fn corridor_centring_at_08_mps_within_5_mm() {
 /// `missions/room-size.toml`: σ ≤ 3 mm over runs.
 #[test]
 fn room_size_learnt_on_tour_within_3_mm() {
-    let report = run_mission(&RunJob {
-        mission: PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../missions/room-size.toml"
-        )),
-        seed: None,
-        runs: None,
-    })
-    .unwrap();
+    let report = crate::run_mission_file("room-size", None).unwrap();
     let (sd, m) = (
         report.room_size_std_m.unwrap(),
         report.room_size_mean_m.unwrap(),
@@ -110,14 +93,6 @@ fn a_mission_out_of_range_names_file_line_and_key() {
         err.contains("bad.toml:8") && err.contains("score_x_m"),
         "{err}"
     );
-    let err = run_mission(&RunJob {
-        mission: PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../missions/corridor.toml"
-        )),
-        seed: None,
-        runs: Some(0),
-    })
-    .unwrap_err();
+    let err = crate::run_mission_file("corridor", Some(0)).unwrap_err();
     assert!(format!("{err:#}").contains("runs"), "{err:#}");
 }

@@ -9,19 +9,10 @@
 //! seconds: people are kinematic, the laser is cast in its plane); the same
 //! figures come from `stucco run missions/door-passage.toml --json`.
 
-use std::path::PathBuf;
 use stucco_cli::{RunJob, run_mission};
 
 fn table_iii(runs: u64) {
-    let report = run_mission(&RunJob {
-        mission: PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../missions/door-passage.toml"
-        )),
-        seed: None,
-        runs: Some(runs),
-    })
-    .unwrap();
+    let report = crate::run_mission_file("door-passage", Some(runs)).unwrap();
     assert_eq!(report.conditions.len(), 6);
     for c in &report.conditions {
         println!(

@@ -135,6 +135,20 @@ fn pose_of(s: &crate::mission::Start) -> Pose2 {
     Pose2::new(s.at[0], s.at[1], s.heading_deg.to_radians())
 }
 
+/// The bounding box `[x0, x1, y0, y1]` of `points`.
+fn bounds(points: &[[f64; 2]]) -> [f64; 4] {
+    points
+        .iter()
+        .fold([f64::MAX, f64::MIN, f64::MAX, f64::MIN], |b, q| {
+            [
+                b[0].min(q[0]),
+                b[1].max(q[0]),
+                b[2].min(q[1]),
+                b[3].max(q[1]),
+            ]
+        })
+}
+
 /// The world with the robot at `start` and the people whose paths cross
 /// the box `x0..x1 × y0..y1` taken out (they would stop the robot).
 fn world_for(world: &WorldSpec, start: &Pose2, lane: [f64; 4]) -> WorldSpec {
@@ -142,14 +156,7 @@ fn world_for(world: &WorldSpec, start: &Pose2, lane: [f64; 4]) -> WorldSpec {
     w.robot.at = [start.x, start.y];
     w.robot.heading_deg = start.theta.to_degrees();
     w.people.retain(|p| {
-        let (x0, x1) = p
-            .path
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(a, b), q| (a.min(q[0]), b.max(q[0])));
-        let (y0, y1) = p
-            .path
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(a, b), q| (a.min(q[1]), b.max(q[1])));
+        let [x0, x1, y0, y1] = bounds(&p.path);
         x1 < lane[0] || x0 > lane[1] || y1 < lane[2] || y0 > lane[3]
     });
     w
@@ -286,18 +293,7 @@ fn true_middle_y(world: &WorldSpec, start: &Pose2) -> Result<f64> {
     world
         .rooms
         .iter()
-        .map(|r| {
-            r.corners
-                .iter()
-                .fold([f64::MAX, f64::MIN, f64::MAX, f64::MIN], |b, c| {
-                    [
-                        b[0].min(c[0]),
-                        b[1].max(c[0]),
-                        b[2].min(c[1]),
-                        b[3].max(c[1]),
-                    ]
-                })
-        })
+        .map(|r| bounds(&r.corners))
         .find(|b| (b[0]..=b[1]).contains(&start.x) && (b[2]..=b[3]).contains(&start.y))
         .map(|b| 0.5 * (b[2] + b[3]))
         .ok_or_else(|| anyhow::anyhow!("the start {start:?} lies in no room of the world"))

@@ -101,13 +101,7 @@ impl Mission {
         let mission: Mission = toml::from_str(&text).map_err(|e| {
             let (line, column) = e
                 .span()
-                .map(|s| {
-                    let before = &text[..s.start.min(text.len())];
-                    (
-                        before.matches('\n').count() + 1,
-                        before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1,
-                    )
-                })
+                .map(|s| stucco_core::line_column(&text, s.start))
                 .unwrap_or((0, 0));
             anyhow::anyhow!("{}:{line}:{column}: {}", path.display(), e.message())
         })?;

@@ -29,6 +29,7 @@ mod platform;
 mod pose;
 mod scan;
 mod stamp;
+mod text;
 mod vehicle;
 
 pub use laser::{BeamWidth, LaserSpec};
@@ -36,6 +37,7 @@ pub use platform::{DriveCommand, EncoderSample, Platform, RangeProfile, Readings
 pub use pose::{Pose2, Twist2, wrap_angle};
 pub use scan::{Beam, Scan};
 pub use stamp::{ParseStampError, Stamp};
+pub use text::line_column;
 pub use vehicle::VehicleSpec;
 
 /// Re-export of the linear-algebra crate the public API uses.
