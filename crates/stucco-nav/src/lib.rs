@@ -7,7 +7,9 @@
 //! - [`HoughTransform`]: the g-weighted transform `C(d, γ)` with the three
 //!   weightings of the paper ([`Weighting`]).
 //! - [`WallExtractor`]: the extractor interface; [`RwhtExtractor`] finds
-//!   peaks one by one and refines each by robust least squares,
+//!   peaks one by one in the transform voted by runs of echoes on one line
+//!   ([`Segmenter`], [`SegmentTransform`]) and refines each by robust
+//!   least squares,
 //!   [`RansacExtractor`] is the baseline of the sensor-precision paper.
 //! - [`RoomSearch`]: the four walls of a rectangular room as one group of
 //!   peaks 90° apart, and the room's orientation.
@@ -47,6 +49,7 @@ mod ransac;
 mod room;
 mod room_ekf;
 mod rwht;
+mod segments;
 pub mod synthetic;
 mod wall;
 
@@ -64,4 +67,5 @@ pub use room_ekf::{
     predict,
 };
 pub use rwht::{RwhtConfig, RwhtExtractor};
+pub use segments::{Segment, SegmentTransform, Segmenter};
 pub use wall::Wall;

@@ -137,7 +137,7 @@ impl LineFitter {
             let next = weighted_tls(pts, &self.candidates, &self.weights)?;
             let moved = (next.d - line.d).abs() + (wrap_angle(next.gamma - line.gamma)).abs() * 5.0;
             line = next;
-            if moved < 1e-5 {
+            if moved < 1e-4 {
                 if chained {
                     break;
                 }

@@ -1,12 +1,18 @@
 //! Wall extraction with the range-weighted Hough transform: peaks found one
 //! at a time, each refined by robust least squares, its measurements removed
 //! before the next (paper A §2.1, paper B §2.2).
+//!
+//! The transform is voted by runs of echoes on one line
+//! ([`crate::segments`]), not echo by echo: a wall's cell holds the same
+//! range-weighted sum, the cells no wall reaches stay empty, and a scan
+//! costs a few hundred votes instead of several thousand.
 
 use crate::NavError;
 use crate::extractor::WallExtractor;
-use crate::hough::{HoughConfig, HoughTransform, Weighting};
+use crate::hough::{HoughConfig, Weighting};
 use crate::line_fit::{FitConfig, LineFitter};
 use crate::points::{ScanPoint, ScanPoints};
+use crate::segments::{Segment, SegmentTransform, Segmenter};
 use crate::wall::Wall;
 use serde::{Deserialize, Serialize};
 
@@ -14,7 +20,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RwhtConfig {
-    /// The transform.
+    /// Grid, window and weighting of the transform. Its surface gate is
+    /// not used: runs of echoes on one line vote instead of single echoes,
+    /// and their lines are taken at `fit.noise_sigma_m`.
     pub hough: HoughConfig,
     /// The robust refinement of each peak.
     pub fit: FitConfig,
@@ -27,8 +35,14 @@ pub struct RwhtConfig {
     /// Walls returned per scan, at most.
     pub max_walls: usize,
     /// Transforms computed per scan, at most: after the first, each one
-    /// transforms the measurements no wall has taken yet.
+    /// transforms the segments no wall has taken yet.
     pub max_passes: usize,
+    /// Fewest echoes in a run that votes.
+    pub min_segment_points: usize,
+    /// A run votes for the angles within three σ of its normal, but no
+    /// farther than this either side, rad: a short run's direction says
+    /// little, and spread over many rows its votes would add to no peak.
+    pub segment_reach_rad: f64,
 }
 
 impl Default for RwhtConfig {
@@ -40,6 +54,8 @@ impl Default for RwhtConfig {
             max_candidates: 48,
             max_walls: 24,
             max_passes: 2,
+            min_segment_points: 4,
+            segment_reach_rad: 0.1,
         }
     }
 }
@@ -54,36 +70,48 @@ struct Candidate {
 
 /// The RWHT wall extractor (or C1 / C2 with another [`Weighting`]).
 ///
-/// Peaks are the local maxima of the transform; their scores are kept exact
-/// as measurements are removed, which is the paper's "remove the
-/// measurements and search again" without recomputing the transform.
+/// Peaks are the local maxima of the transform; a peak's score is recounted
+/// from the segments not yet taken when it comes up, which is the paper's
+/// "remove the measurements and search again" without recomputing the
+/// transform.
 #[derive(Clone, Debug)]
 pub struct RwhtExtractor {
     config: RwhtConfig,
-    hough: HoughTransform,
+    segmenter: Segmenter,
+    transform: SegmentTransform,
     fitter: LineFitter,
+    segments: Vec<Segment>,
+    /// Segments a wall has taken (most of their echoes).
+    spent: Vec<bool>,
     taken: Vec<bool>,
     candidates: Vec<Candidate>,
-    /// The measurements not yet taken by a wall, for later passes.
-    left: Vec<ScanPoint>,
-    /// Where each measurement the transform was computed on sits in the
-    /// scan.
-    in_scan: Vec<usize>,
+    seeds: Vec<usize>,
 }
 
 impl RwhtExtractor {
     /// An extractor with `config`.
     pub fn new(config: RwhtConfig) -> Result<Self, NavError> {
-        let hough = HoughTransform::new(config.hough.clone())?;
-        let fitter = LineFitter::new(config.fit.clone());
+        config.hough.validate()?;
+        if config.min_segment_points < 3 {
+            return Err(NavError::InvalidConfig {
+                field: "min_segment_points",
+                reason: "must be at least 3: two echoes make no line".to_owned(),
+            });
+        }
+        let segmenter = Segmenter {
+            noise_m: config.fit.noise_sigma_m,
+            min_points: config.min_segment_points,
+        };
         Ok(RwhtExtractor {
+            transform: SegmentTransform::new(config.hough.clone(), config.segment_reach_rad),
+            fitter: LineFitter::new(config.fit.clone()),
+            segmenter,
             config,
-            hough,
-            fitter,
+            segments: Vec::new(),
+            spent: Vec::new(),
             taken: Vec::new(),
             candidates: Vec::new(),
-            left: Vec::new(),
-            in_scan: Vec::new(),
+            seeds: Vec::new(),
         })
     }
 
@@ -93,8 +121,13 @@ impl RwhtExtractor {
     }
 
     /// The transform of the last scan extracted.
-    pub fn transform(&self) -> &HoughTransform {
-        &self.hough
+    pub fn transform(&self) -> &SegmentTransform {
+        &self.transform
+    }
+
+    /// The segments of the last scan extracted.
+    pub fn segments(&self) -> &[Segment] {
+        &self.segments
     }
 
     fn threshold(&self, angle_increment_rad: f64) -> f64 {
@@ -107,7 +140,7 @@ impl RwhtExtractor {
     /// Local maxima of the accumulator above `threshold`, strongest first.
     fn find_candidates(&mut self, threshold: f64) {
         self.candidates.clear();
-        let h = &self.hough;
+        let h = &self.transform;
         let (n, m) = (h.angle_bins(), h.distance_bins());
         for k in 0..n {
             let row = h.row(k);
@@ -156,25 +189,23 @@ impl WallExtractor for RwhtExtractor {
 
     fn extract(&mut self, points: &ScanPoints) -> Vec<Wall> {
         let pts = points.points();
+        let max_range = self.config.hough.max_range_m;
         self.taken.clear();
-        self.taken.extend(pts.iter().map(|p| !self.hough.uses(p)));
+        self.taken.extend(pts.iter().map(|p| p.range_m > max_range));
+        self.segmenter.split(pts, &mut self.segments);
+        let taken = &self.taken;
+        self.segments
+            .retain(|s| (s.first..s.end).all(|i| !taken[i]));
+        self.spent.clear();
+        self.spent.resize(self.segments.len(), false);
         let threshold = self.threshold(points.angle_increment_rad());
         let mut walls = Vec::new();
         // A wall whose cell sits beside a stronger peak is no local maximum
-        // until that peak's measurements are gone: when the peaks of one
+        // until that peak's segments are gone: when the peaks of one
         // transform are used up, transform what is left and search again.
-        for pass in 0..self.config.max_passes {
-            self.in_scan.clear();
-            if pass == 0 {
-                self.in_scan.extend(0..pts.len());
-                self.hough.compute(pts);
-            } else {
-                self.in_scan
-                    .extend((0..pts.len()).filter(|&i| !self.taken[i]));
-                self.left.clear();
-                self.left.extend(self.in_scan.iter().map(|&i| pts[i]));
-                self.hough.compute(&self.left);
-            }
+        for _ in 0..self.config.max_passes {
+            let spent = &self.spent;
+            self.transform.compute(&self.segments, |s| !spent[s]);
             self.find_candidates(threshold);
             let before = walls.len();
             self.take_peaks(pts, threshold, &mut walls);
@@ -187,31 +218,66 @@ impl WallExtractor for RwhtExtractor {
 }
 
 impl RwhtExtractor {
-    /// Fits the candidates of the current transform, strongest first,
-    /// removing each wall's measurements from the scores of the rest.
+    /// Fits the candidates of the current transform, strongest first. A
+    /// candidate's score only falls as walls take segments, so the scores
+    /// are refreshed lazily: the highest stored score is recounted from its
+    /// cell's segments not yet taken, and it is the strongest peak when its
+    /// fresh score still beats every other stored one.
     fn take_peaks(&mut self, pts: &[ScanPoint], threshold: f64, walls: &mut Vec<Wall>) {
         while walls.len() < self.config.max_walls {
-            let Some(best) = self
+            let mut order = self
                 .candidates
                 .iter()
                 .enumerate()
                 .filter(|(_, c)| c.alive && c.score >= threshold)
-                .max_by(|a, b| a.1.score.total_cmp(&b.1.score).then(b.0.cmp(&a.0)))
-                .map(|(i, _)| i)
-            else {
+                .map(|(i, c)| (i, c.score));
+            let Some(first) = order.next() else {
                 break;
             };
-            let Candidate { k, j, .. } = self.candidates[best];
-            self.candidates[best].alive = false;
-            let in_scan = &self.in_scan;
-            let seeds = self.hough.voters(k, j).map(|i| in_scan[i]);
-            let Some(fit) = self.fitter.fit(pts, &self.taken, seeds) else {
+            // The highest stored score and the one after it (ties to the
+            // earlier candidate, as the candidates are sorted).
+            let (best, runner_up) = order.fold((first, None::<f64>), |(b, r), (i, s)| {
+                if s > b.1 {
+                    ((i, s), Some(b.1))
+                } else {
+                    (b, Some(r.map_or(s, |r: f64| r.max(s))))
+                }
+            });
+            let Candidate { k, j, .. } = self.candidates[best.0];
+            let spent = &self.spent;
+            let fresh: f64 = self
+                .transform
+                .votes_in(k, j)
+                .filter(|&(s, _)| !spent[s])
+                .map(|(_, g)| g)
+                .sum();
+            self.candidates[best.0].score = fresh;
+            if fresh < threshold || runner_up.is_some_and(|r| fresh < r) {
+                continue;
+            }
+            self.candidates[best.0].alive = false;
+            self.seeds.clear();
+            for (s, _) in self.transform.votes_in(k, j) {
+                if !self.spent[s] {
+                    let seg = &self.segments[s];
+                    self.seeds.extend(seg.first..seg.end);
+                }
+            }
+            self.seeds.sort_unstable();
+            let Some(fit) = self
+                .fitter
+                .fit(pts, &self.taken, self.seeds.iter().copied())
+            else {
                 continue;
             };
             for &i in &fit.support {
                 self.taken[i] = true;
-                for c in self.candidates.iter_mut().filter(|c| c.alive) {
-                    c.score -= self.hough.contribution(&pts[i], c.k, c.j);
+            }
+            // A segment is spent once a wall holds most of its echoes.
+            for (seg, spent) in self.segments.iter().zip(&mut self.spent) {
+                if !*spent {
+                    let held = (seg.first..seg.end).filter(|&i| self.taken[i]).count();
+                    *spent = 2 * held > seg.len();
                 }
             }
             walls.push(fit.wall);
