@@ -1,0 +1,307 @@
+//! Behaviours: the motions tasks are built of, each a control law of
+//! `stucco-control` with a start and an end. A task is a queue of them.
+
+use crate::model::{Estimate, WallGeometry};
+use crate::task::{Side, WallName};
+use serde::Serialize;
+use stucco_control::{GainSchedule, PathFollower, PoseRegulator, WallFollower, WallSide};
+use stucco_core::{DriveCommand, Pose2, Stamp, VehicleSpec, wrap_angle};
+
+/// Heading error a pivot stops at, rad.
+const PIVOT_TOLERANCE_RAD: f64 = 0.01;
+/// A goal nearer than this needs no drive, only a turn, m.
+const NEAR_M: f64 = 0.05;
+/// A turn smaller than this is left to the line law, rad.
+const SMALL_TURN_RAD: f64 = 0.035;
+
+/// One step of a behaviour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Step {
+    /// Still at it, with this command.
+    Drive(DriveCommand),
+    /// Finished.
+    Done,
+}
+
+/// The phases of a turn on the spot.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PivotPhase {
+    /// Standing, the front wheel turning to ±90°.
+    Steer,
+    /// Driving the wheel across: the robot turns about its rear axle.
+    Turn,
+    /// Standing, the wheel coming back straight.
+    Straighten,
+}
+
+/// What a behaviour is doing, for the state report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "behaviour", rename_all = "snake_case")]
+pub enum BehaviourKind {
+    /// Standing still.
+    Hold,
+    /// Turning on the spot to `heading_rad`.
+    Pivot {
+        /// The heading, rad.
+        heading_rad: f64,
+        /// The phase.
+        phase: PivotPhase,
+    },
+    /// Driving along the line through `goal` to it.
+    Regulate {
+        /// The goal pose.
+        goal: Pose2,
+    },
+    /// Following a wall at a standoff up to a position along it.
+    FollowWall {
+        /// The wall.
+        wall: WallName,
+        /// The standoff, m.
+        standoff_m: f64,
+        /// Where it stops along the wall, m.
+        to_m: f64,
+    },
+    /// Following a path of segments.
+    Path {
+        /// The segment being followed.
+        segment: usize,
+        /// Segments in all.
+        segments: usize,
+    },
+}
+
+/// A behaviour with its law and progress.
+#[derive(Clone, Debug)]
+pub struct Behaviour {
+    kind: BehaviourKind,
+    law: Law,
+    started: Option<Stamp>,
+}
+
+#[derive(Clone, Debug)]
+enum Law {
+    Hold,
+    Pivot,
+    Regulate(PoseRegulator),
+    Wall {
+        law: WallFollower,
+        speed_mps: f64,
+        forward: bool,
+    },
+    Path(PathFollower, usize),
+}
+
+impl Behaviour {
+    /// Standing still until the task decides otherwise.
+    pub fn hold() -> Self {
+        Behaviour {
+            kind: BehaviourKind::Hold,
+            law: Law::Hold,
+            started: None,
+        }
+    }
+
+    /// A turn on the spot to `heading_rad`.
+    pub fn pivot(heading_rad: f64) -> Self {
+        Behaviour {
+            kind: BehaviourKind::Pivot {
+                heading_rad: wrap_angle(heading_rad),
+                phase: PivotPhase::Steer,
+            },
+            law: Law::Pivot,
+            started: None,
+        }
+    }
+
+    /// Driving along the line through `goal` (along its heading) to it.
+    pub fn regulate(gains: &GainSchedule, goal: Pose2, speed_mps: f64) -> Self {
+        let mut law = PoseRegulator::new(gains.clone(), speed_mps);
+        law.tolerance_m = 0.005;
+        Behaviour {
+            kind: BehaviourKind::Regulate { goal },
+            law: Law::Regulate(law),
+            started: None,
+        }
+    }
+
+    /// Following `wall` at `standoff_m` to `to_m` along it, the wall on
+    /// `side`.
+    pub fn follow_wall(
+        gains: &GainSchedule,
+        wall: WallName,
+        side: Side,
+        standoff_m: f64,
+        to_m: f64,
+        forward: bool,
+        speed_mps: f64,
+    ) -> Self {
+        let side = match side {
+            Side::Left => WallSide::Left,
+            Side::Right => WallSide::Right,
+        };
+        Behaviour {
+            kind: BehaviourKind::FollowWall {
+                wall,
+                standoff_m,
+                to_m,
+            },
+            law: Law::Wall {
+                law: WallFollower::new(gains.clone(), side, standoff_m),
+                speed_mps,
+                forward,
+            },
+            started: None,
+        }
+    }
+
+    /// Following the path through `points`.
+    pub fn path(gains: &GainSchedule, points: Vec<[f64; 2]>, speed_mps: f64) -> Self {
+        let segments = points.len().saturating_sub(1);
+        Behaviour {
+            kind: BehaviourKind::Path {
+                segment: 0,
+                segments,
+            },
+            law: Law::Path(
+                PathFollower::new(gains.clone(), points, speed_mps),
+                segments,
+            ),
+            started: None,
+        }
+    }
+
+    /// What it is doing.
+    pub fn kind(&self) -> &BehaviourKind {
+        &self.kind
+    }
+
+    /// Its name, for events.
+    pub fn name(&self) -> &'static str {
+        match self.kind {
+            BehaviourKind::Hold => "hold",
+            BehaviourKind::Pivot { .. } => "pivot",
+            BehaviourKind::Regulate { .. } => "regulate",
+            BehaviourKind::FollowWall { .. } => "follow_wall",
+            BehaviourKind::Path { .. } => "path",
+        }
+    }
+
+    /// True for a turn on the spot.
+    pub fn is_pivot(&self) -> bool {
+        matches!(self.kind, BehaviourKind::Pivot { .. })
+    }
+
+    /// One control step at `now` on the estimate `est`.
+    pub fn step(&mut self, now: Stamp, est: &Estimate, vehicle: &VehicleSpec) -> Step {
+        let started = *self.started.get_or_insert(now);
+        let pose = est.pose;
+        match (&mut self.law, &mut self.kind) {
+            (Law::Hold, _) => Step::Drive(DriveCommand::STOP),
+            (Law::Pivot, BehaviourKind::Pivot { heading_rad, phase }) => {
+                // The wheel needs this long to swing through 90°.
+                let settle = vehicle.max_steer_rad / vehicle.max_steer_rate_radps + 0.1;
+                let err = wrap_angle(*heading_rad - pose.theta);
+                let steer = vehicle.max_steer_rad.copysign(err);
+                match phase {
+                    PivotPhase::Steer => {
+                        if now.seconds_since(started) >= settle {
+                            *phase = PivotPhase::Turn;
+                        }
+                        Step::Drive(DriveCommand {
+                            speed_mps: 0.0,
+                            steer_rad: steer,
+                        })
+                    }
+                    PivotPhase::Turn => {
+                        if err.abs() <= PIVOT_TOLERANCE_RAD {
+                            *phase = PivotPhase::Straighten;
+                            self.started = Some(now);
+                            return Step::Drive(DriveCommand::STOP);
+                        }
+                        // ω = v / wheelbase with the wheel across; slow
+                        // near the heading.
+                        let omega = (1.5 * err.abs()).clamp(0.05, 0.6);
+                        Step::Drive(DriveCommand {
+                            speed_mps: omega * vehicle.wheelbase_m,
+                            steer_rad: steer,
+                        })
+                    }
+                    PivotPhase::Straighten => {
+                        if now.seconds_since(started) >= settle {
+                            Step::Done
+                        } else {
+                            Step::Drive(DriveCommand::STOP)
+                        }
+                    }
+                }
+            }
+            (Law::Pivot, _) => Step::Done,
+            (Law::Regulate(law), BehaviourKind::Regulate { goal }) => {
+                let rel = goal.inverse() * pose;
+                if -rel.x <= law.tolerance_m {
+                    return Step::Done;
+                }
+                Step::Drive(law.command(&pose, goal))
+            }
+            (Law::Regulate(_), _) => Step::Done,
+            (
+                Law::Wall {
+                    law,
+                    speed_mps,
+                    forward,
+                },
+                BehaviourKind::FollowWall { wall, to_m, .. },
+            ) => {
+                let g = WallGeometry::of(*wall, est.room_m);
+                let at = g.position(&pose.position().coords);
+                let remaining = if *forward { *to_m - at } else { at - *to_m };
+                if remaining <= 0.005 {
+                    return Step::Done;
+                }
+                let speed = *speed_mps * (remaining / 0.5).clamp(0.1, 1.0);
+                let (d, gamma) = g.seen_from(&pose);
+                Step::Drive(DriveCommand {
+                    speed_mps: speed,
+                    steer_rad: law.steer(d, gamma, speed),
+                })
+            }
+            (Law::Wall { .. }, _) => Step::Done,
+            (Law::Path(law, segments), BehaviourKind::Path { segment, .. }) => {
+                let cmd = law.command(&pose);
+                *segment = law.segment();
+                if law.segment() >= *segments {
+                    Step::Done
+                } else {
+                    Step::Drive(cmd)
+                }
+            }
+            (Law::Path(..), _) => Step::Done,
+        }
+    }
+}
+
+/// The behaviours that take a robot at `from` to `goal` on a tricycle that
+/// turns on the spot: turn toward the goal, drive the line to it, turn to
+/// its heading. Turns too small to matter are left to the line law.
+pub fn go_to(gains: &GainSchedule, from: &Pose2, goal: &Pose2, speed_mps: f64) -> Vec<Behaviour> {
+    let mut out = Vec::new();
+    let delta = goal.position() - from.position();
+    if delta.norm() > NEAR_M {
+        let heading = delta.y.atan2(delta.x);
+        if wrap_angle(heading - from.theta).abs() > SMALL_TURN_RAD {
+            out.push(Behaviour::pivot(heading));
+        }
+        out.push(Behaviour::regulate(
+            gains,
+            Pose2::new(goal.x, goal.y, heading),
+            speed_mps,
+        ));
+        if wrap_angle(goal.theta - heading).abs() > SMALL_TURN_RAD {
+            out.push(Behaviour::pivot(goal.theta));
+        }
+    } else if wrap_angle(goal.theta - from.theta).abs() > PIVOT_TOLERANCE_RAD {
+        out.push(Behaviour::pivot(goal.theta));
+    }
+    out
+}

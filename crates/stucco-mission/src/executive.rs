@@ -1,0 +1,969 @@
+//! The layered executive: mission → task → behaviour → control law, stepped
+//! by `tick(now, inputs) -> outputs`, with the safety supervisor over every
+//! layer.
+
+use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
+use crate::model::{Estimate, WallGeometry, pose_at_wall};
+use crate::supervisor::{Hazard, LostPolicy, SafetyConfig, Supervisor};
+use crate::task::{OnTimeout, TaskSpec};
+use nalgebra::Point2;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use stucco_control::GainSchedule;
+use stucco_core::{DriveCommand, Pose2, Stamp, VehicleSpec};
+
+/// Run-in along the wall before a pass starts, m: the line law's distance
+/// to settle on the standoff from where the robot could turn (the offset
+/// falls by e every ~0.4 m at a wall-following speed).
+const RUN_IN_M: f64 = 2.0;
+/// The shortest run-in accepted near a corner, m (a 0.3 m offset settles
+/// to about a centimetre).
+const MIN_RUN_IN_M: f64 = 1.5;
+
+/// What the operator (or a script standing in for one) asks of the
+/// executive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OperatorCommand {
+    /// Stop where you are and wait.
+    Pause,
+    /// Go on after a pause or a released e-stop.
+    Resume,
+    /// Give the mission up.
+    Abort,
+    /// Give the current task up and go on with the next.
+    Skip,
+    /// The answer a `wait_for_operator` task waits for.
+    Continue,
+}
+
+/// The mission's state.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "state", rename_all = "snake_case")]
+pub enum MissionMode {
+    /// Carrying out its tasks.
+    Running,
+    /// Stopped by the operator or a fault, waiting for `resume`.
+    Paused {
+        /// Why.
+        reason: String,
+    },
+    /// Stopped by the e-stop; waits for its release and `resume`.
+    EStopped,
+    /// Every task done or skipped.
+    Done,
+    /// A task failed.
+    Failed {
+        /// Why.
+        reason: String,
+    },
+    /// Given up by the operator.
+    Aborted,
+}
+
+impl MissionMode {
+    /// True once the mission is over.
+    pub fn is_final(&self) -> bool {
+        matches!(
+            self,
+            MissionMode::Done | MissionMode::Failed { .. } | MissionMode::Aborted
+        )
+    }
+}
+
+/// A task's state.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "state", rename_all = "snake_case")]
+pub enum TaskStatus {
+    /// Not started.
+    Pending,
+    /// Being carried out.
+    Active,
+    /// Finished.
+    Done,
+    /// Given up by the operator.
+    Skipped,
+    /// Failed.
+    Failed {
+        /// Why.
+        reason: String,
+    },
+}
+
+/// Something that happened, for the event log.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Event {
+    /// When.
+    pub stamp: Stamp,
+    /// What.
+    #[serde(flatten)]
+    pub kind: EventKind,
+}
+
+/// The kinds of events.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum EventKind {
+    /// The mission began (or resumed from a checkpoint at `first_task`).
+    MissionStarted {
+        /// Tasks in all.
+        tasks: usize,
+        /// The first task to carry out.
+        first_task: usize,
+    },
+    /// A task began.
+    TaskStarted {
+        /// Its index.
+        task: usize,
+        /// Its name.
+        name: String,
+    },
+    /// A behaviour began.
+    BehaviourStarted {
+        /// The task.
+        task: usize,
+        /// The behaviour's name.
+        behaviour: String,
+    },
+    /// A task finished.
+    TaskDone {
+        /// Its index.
+        task: usize,
+    },
+    /// A task was skipped.
+    TaskSkipped {
+        /// Its index.
+        task: usize,
+    },
+    /// A task failed.
+    TaskFailed {
+        /// Its index.
+        task: usize,
+        /// Why.
+        reason: String,
+    },
+    /// The operator was asked something.
+    OperatorPrompt {
+        /// The task.
+        task: usize,
+        /// The question.
+        prompt: String,
+    },
+    /// The mission paused.
+    Paused {
+        /// Why.
+        reason: String,
+    },
+    /// The mission resumed.
+    Resumed,
+    /// The e-stop was pressed.
+    EStop,
+    /// The supervisor stopped the robot.
+    SafetyStop {
+        /// What for.
+        hazard: Hazard,
+    },
+    /// The supervisor let it go on.
+    SafetyClear,
+    /// The operator gave the mission up.
+    Aborted,
+    /// Every task done or skipped.
+    MissionDone,
+    /// The mission failed.
+    MissionFailed {
+        /// Why.
+        reason: String,
+    },
+    /// An operator command could not be followed.
+    CommandRefused {
+        /// The command.
+        command: OperatorCommand,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// What the executive reads each tick.
+#[derive(Clone, Copy, Debug)]
+pub struct Inputs<'a> {
+    /// The navigation core's estimate.
+    pub estimate: &'a Estimate,
+    /// The last scan's echoes in the robot's frame (rear axle at the
+    /// origin), for the protective field.
+    pub obstacles: &'a [Point2<f64>],
+    /// A bumper touched something.
+    pub bumper: bool,
+    /// The e-stop is pressed.
+    pub estop: bool,
+    /// Operator commands that arrived since the last tick.
+    pub operator: &'a [OperatorCommand],
+}
+
+/// What the executive hands back each tick.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outputs {
+    /// The drive command (after the supervisor).
+    pub drive: DriveCommand,
+    /// Spray on (only ever with the supervisor's leave).
+    pub spray: bool,
+    /// Events since the last tick.
+    pub events: Vec<Event>,
+    /// A unit of work completed: the progress should be written now.
+    pub checkpoint_due: bool,
+}
+
+/// The executive's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExecutiveConfig {
+    /// The robot.
+    pub vehicle: VehicleSpec,
+    /// The line law's gains.
+    pub gains: GainSchedule,
+    /// The supervisor's settings.
+    pub safety: SafetyConfig,
+    /// No operator is there to answer: what would wait for one fails
+    /// the mission instead (a bumper, an e-stop).
+    pub unattended: bool,
+}
+
+/// The mission's progress as a checkpoint keeps it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Progress {
+    /// The task names, in order (a checkpoint of another mission is
+    /// refused).
+    pub tasks: Vec<String>,
+    /// Each task's state.
+    pub status: Vec<TaskStatus>,
+}
+
+/// Why a checkpoint cannot be resumed from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProgressMismatch(pub String);
+
+impl std::fmt::Display for ProgressMismatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ProgressMismatch {}
+
+/// The task being carried out.
+#[derive(Clone, Debug)]
+struct ActiveTask {
+    index: usize,
+    started: Stamp,
+    queue: VecDeque<Behaviour>,
+    current: Option<Behaviour>,
+    /// Loops of a `map_room` survey driven.
+    loops: usize,
+    /// Seconds the way has been blocked.
+    blocked_s: f64,
+}
+
+/// The executive.
+#[derive(Clone, Debug)]
+pub struct Executive {
+    config: ExecutiveConfig,
+    tasks: Vec<TaskSpec>,
+    status: Vec<TaskStatus>,
+    mode: MissionMode,
+    active: Option<ActiveTask>,
+    supervisor: Supervisor,
+    events: Vec<Event>,
+    started: bool,
+    last_tick: Option<Stamp>,
+    hazard: Option<Hazard>,
+    lost_since: Option<Stamp>,
+    continue_asked: bool,
+}
+
+impl Executive {
+    /// An executive for `tasks`, none done yet.
+    pub fn new(config: ExecutiveConfig, tasks: Vec<TaskSpec>) -> Self {
+        let n = tasks.len();
+        Executive {
+            supervisor: Supervisor::new(config.safety.clone(), config.vehicle.clone()),
+            config,
+            tasks,
+            status: vec![TaskStatus::Pending; n],
+            mode: MissionMode::Running,
+            active: None,
+            events: Vec::new(),
+            started: false,
+            last_tick: None,
+            hazard: None,
+            lost_since: None,
+            continue_asked: false,
+        }
+    }
+
+    /// Takes up the progress of a checkpoint: tasks done, skipped or
+    /// failed stay so; a task that was under way starts again.
+    pub fn resume_from(&mut self, progress: &Progress) -> Result<(), ProgressMismatch> {
+        let names: Vec<&str> = self.tasks.iter().map(TaskSpec::name).collect();
+        if progress.tasks != names || progress.status.len() != names.len() {
+            return Err(ProgressMismatch(format!(
+                "the checkpoint holds tasks {:?}, the mission {:?}",
+                progress.tasks, names
+            )));
+        }
+        self.status = progress
+            .status
+            .iter()
+            .map(|s| match s {
+                TaskStatus::Active => TaskStatus::Pending,
+                other => other.clone(),
+            })
+            .collect();
+        Ok(())
+    }
+
+    /// The progress to keep in a checkpoint.
+    pub fn progress(&self) -> Progress {
+        Progress {
+            tasks: self.tasks.iter().map(|t| t.name().to_owned()).collect(),
+            status: self.status.clone(),
+        }
+    }
+
+    /// The mission's state.
+    pub fn mode(&self) -> &MissionMode {
+        &self.mode
+    }
+
+    /// Each task's state.
+    pub fn status(&self) -> &[TaskStatus] {
+        &self.status
+    }
+
+    /// The tasks.
+    pub fn tasks(&self) -> &[TaskSpec] {
+        &self.tasks
+    }
+
+    /// The task under way: its index and name.
+    pub fn current_task(&self) -> Option<(usize, &'static str)> {
+        self.active
+            .as_ref()
+            .map(|a| (a.index, self.tasks[a.index].name()))
+    }
+
+    /// The behaviour under way.
+    pub fn current_behaviour(&self) -> Option<&BehaviourKind> {
+        self.active
+            .as_ref()
+            .and_then(|a| a.current.as_ref())
+            .map(Behaviour::kind)
+    }
+
+    /// What the supervisor is holding the robot for.
+    pub fn hazard(&self) -> Option<Hazard> {
+        self.hazard
+    }
+
+    fn emit(&mut self, stamp: Stamp, kind: EventKind) {
+        self.events.push(Event { stamp, kind });
+    }
+
+    /// One step of the executive at `now`.
+    pub fn tick(&mut self, now: Stamp, inputs: &Inputs) -> Outputs {
+        let dt = self
+            .last_tick
+            .map_or(0.0, |t| now.seconds_since(t).max(0.0));
+        self.last_tick = Some(now);
+        let mut checkpoint_due = false;
+        if !self.started {
+            self.started = true;
+            let first_task = self
+                .status
+                .iter()
+                .position(|s| *s == TaskStatus::Pending)
+                .unwrap_or(self.tasks.len());
+            self.emit(
+                now,
+                EventKind::MissionStarted {
+                    tasks: self.tasks.len(),
+                    first_task,
+                },
+            );
+        }
+        for &cmd in inputs.operator {
+            checkpoint_due |= self.operator(now, cmd);
+        }
+        // The e-stop overrides everything, at once.
+        if inputs.estop && !self.mode.is_final() && self.mode != MissionMode::EStopped {
+            self.emit(now, EventKind::EStop);
+            if self.config.unattended {
+                self.fail(now, "e-stop pressed".to_owned());
+                checkpoint_due = true;
+            } else {
+                self.mode = MissionMode::EStopped;
+            }
+        }
+        if inputs.bumper && self.mode == MissionMode::Running {
+            if self.config.unattended {
+                self.fail(now, "bumper: the robot touched something".to_owned());
+                checkpoint_due = true;
+            } else {
+                self.pause(now, "bumper: the robot touched something".to_owned());
+            }
+        }
+        let mut drive = DriveCommand::STOP;
+        if self.mode == MissionMode::Running {
+            let (cmd, unit_done) = self.run(now, inputs.estimate);
+            checkpoint_due |= unit_done;
+            drive = self.supervise(now, cmd, inputs, dt, &mut checkpoint_due);
+        }
+        Outputs {
+            drive,
+            spray: false,
+            events: std::mem::take(&mut self.events),
+            checkpoint_due,
+        }
+    }
+
+    /// Follows an operator command; true when the progress changed.
+    fn operator(&mut self, now: Stamp, cmd: OperatorCommand) -> bool {
+        let refuse = |s: &mut Self, reason: &str| {
+            s.emit(
+                now,
+                EventKind::CommandRefused {
+                    command: cmd,
+                    reason: reason.to_owned(),
+                },
+            );
+            false
+        };
+        if self.mode.is_final() {
+            return refuse(self, "the mission is over");
+        }
+        match cmd {
+            OperatorCommand::Pause => {
+                if self.mode == MissionMode::Running {
+                    self.pause(now, "operator".to_owned());
+                    false
+                } else {
+                    refuse(self, "not running")
+                }
+            }
+            OperatorCommand::Resume => match self.mode {
+                MissionMode::Paused { .. } | MissionMode::EStopped => {
+                    self.mode = MissionMode::Running;
+                    self.emit(now, EventKind::Resumed);
+                    false
+                }
+                _ => refuse(self, "not paused"),
+            },
+            OperatorCommand::Abort => {
+                if let Some(a) = self.active.take() {
+                    self.status[a.index] = TaskStatus::Pending;
+                }
+                self.mode = MissionMode::Aborted;
+                self.emit(now, EventKind::Aborted);
+                true
+            }
+            OperatorCommand::Skip => {
+                let Some(a) = self.active.take() else {
+                    return refuse(self, "no task under way");
+                };
+                self.status[a.index] = TaskStatus::Skipped;
+                self.emit(now, EventKind::TaskSkipped { task: a.index });
+                true
+            }
+            OperatorCommand::Continue => {
+                let waiting = self.active.as_ref().is_some_and(|a| {
+                    matches!(self.tasks[a.index], TaskSpec::WaitForOperator { .. })
+                });
+                if waiting {
+                    self.continue_asked = true;
+                    false
+                } else {
+                    refuse(self, "no task is waiting for the operator")
+                }
+            }
+        }
+    }
+
+    fn pause(&mut self, now: Stamp, reason: String) {
+        self.mode = MissionMode::Paused {
+            reason: reason.clone(),
+        };
+        self.emit(now, EventKind::Paused { reason });
+    }
+
+    fn fail(&mut self, now: Stamp, reason: String) {
+        if let Some(a) = self.active.take() {
+            self.status[a.index] = TaskStatus::Failed {
+                reason: reason.clone(),
+            };
+            self.emit(
+                now,
+                EventKind::TaskFailed {
+                    task: a.index,
+                    reason: reason.clone(),
+                },
+            );
+        }
+        self.mode = MissionMode::Failed {
+            reason: reason.clone(),
+        };
+        self.emit(now, EventKind::MissionFailed { reason });
+    }
+
+    /// The supervisor over the task's command.
+    fn supervise(
+        &mut self,
+        now: Stamp,
+        cmd: DriveCommand,
+        inputs: &Inputs,
+        dt: f64,
+        checkpoint_due: &mut bool,
+    ) -> DriveCommand {
+        let verdict = self
+            .supervisor
+            .check(cmd, inputs.obstacles, inputs.estimate, dt);
+        if verdict.hazard != self.hazard {
+            match verdict.hazard {
+                Some(h) => self.emit(now, EventKind::SafetyStop { hazard: h }),
+                None => self.emit(now, EventKind::SafetyClear),
+            }
+            self.hazard = verdict.hazard;
+        }
+        let safety = self.config.safety.clone();
+        match verdict.hazard {
+            Some(Hazard::Lost) => {
+                let since = *self.lost_since.get_or_insert(now);
+                if safety.on_lost == LostPolicy::Fail
+                    || now.seconds_since(since) > safety.lost_timeout_s
+                {
+                    self.fail(now, "the pose estimate is lost".to_owned());
+                    *checkpoint_due = true;
+                }
+            }
+            Some(Hazard::Obstacle) => {
+                self.lost_since = None;
+                if let Some(a) = self.active.as_mut() {
+                    a.blocked_s += dt;
+                    if a.blocked_s > safety.blocked_timeout_s {
+                        self.fail(now, "the way stayed blocked".to_owned());
+                        *checkpoint_due = true;
+                    }
+                }
+            }
+            None => {
+                self.lost_since = None;
+                if let Some(a) = self.active.as_mut() {
+                    a.blocked_s = 0.0;
+                }
+            }
+        }
+        if self.mode == MissionMode::Running {
+            verdict.drive
+        } else {
+            DriveCommand::STOP
+        }
+    }
+
+    /// The task layer: starts tasks, steps their behaviours, decides when
+    /// they are done. Returns the command and whether a task ended.
+    fn run(&mut self, now: Stamp, est: &Estimate) -> (DriveCommand, bool) {
+        let mut ended = false;
+        // A few rounds: a behaviour or task that ends at once hands over
+        // to the next within the same tick.
+        for _ in 0..8 {
+            if self.active.is_none() {
+                let Some(next) = self.status.iter().position(|s| *s == TaskStatus::Pending) else {
+                    self.mode = MissionMode::Done;
+                    self.emit(now, EventKind::MissionDone);
+                    return (DriveCommand::STOP, ended);
+                };
+                match self.start(now, next, est) {
+                    Ok(task) => {
+                        self.status[next] = TaskStatus::Active;
+                        self.emit(
+                            now,
+                            EventKind::TaskStarted {
+                                task: next,
+                                name: self.tasks[next].name().to_owned(),
+                            },
+                        );
+                        self.active = Some(task);
+                    }
+                    Err(reason) => {
+                        self.status[next] = TaskStatus::Active;
+                        self.active = Some(ActiveTask {
+                            index: next,
+                            started: now,
+                            queue: VecDeque::new(),
+                            current: None,
+                            loops: 0,
+                            blocked_s: 0.0,
+                        });
+                        self.fail(now, reason);
+                        return (DriveCommand::STOP, true);
+                    }
+                }
+            }
+            match self.step_task(now, est) {
+                TaskStep::Drive(cmd) => return (cmd, ended),
+                TaskStep::Done => {
+                    if let Some(a) = self.active.take() {
+                        self.status[a.index] = TaskStatus::Done;
+                        self.emit(now, EventKind::TaskDone { task: a.index });
+                    }
+                    ended = true;
+                }
+                TaskStep::Failed(reason) => {
+                    self.fail(now, reason);
+                    return (DriveCommand::STOP, true);
+                }
+            }
+        }
+        (DriveCommand::STOP, ended)
+    }
+
+    /// Plans task `index` from the estimate.
+    fn start(&mut self, now: Stamp, index: usize, est: &Estimate) -> Result<ActiveTask, String> {
+        let gains = &self.config.gains;
+        let pose = est.pose;
+        let clearance = self.pivot_clearance();
+        let mut queue = VecDeque::new();
+        match &self.tasks[index] {
+            TaskSpec::MapRoom {
+                path,
+                inset_m,
+                speed_mps,
+                ..
+            } => {
+                let loop_ = survey_loop(path.as_deref(), *inset_m, est.room_m)?;
+                let first = loop_[0];
+                let towards = (loop_[1][1] - first[1]).atan2(loop_[1][0] - first[0]);
+                queue.extend(go_to(
+                    gains,
+                    &pose,
+                    &Pose2::new(first[0], first[1], towards),
+                    *speed_mps,
+                ));
+                queue.push_back(Behaviour::path(gains, closed(&loop_), *speed_mps));
+            }
+            TaskSpec::Localize { .. } | TaskSpec::WaitForOperator { .. } => {
+                queue.push_back(Behaviour::hold());
+            }
+            TaskSpec::MoveRelative {
+                dx_m,
+                dy_m,
+                dtheta_deg,
+                speed_mps,
+            } => {
+                let goal = pose * Pose2::new(*dx_m, *dy_m, dtheta_deg.to_radians());
+                queue.extend(go_to(gains, &pose, &goal, *speed_mps));
+            }
+            TaskSpec::AlignToWall {
+                wall,
+                standoff_m,
+                at_m,
+                side,
+                speed_mps,
+            } => {
+                let goal = pose_at_wall(*wall, est.room_m, *at_m, *standoff_m, *side);
+                queue.extend(self.approach(&pose, &goal, *wall, est, clearance, *speed_mps)?);
+                let g = WallGeometry::of(*wall, est.room_m);
+                let forward = g
+                    .along
+                    .dot(&nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin()))
+                    > 0.0;
+                queue.push_back(Behaviour::follow_wall(
+                    gains,
+                    *wall,
+                    *side,
+                    *standoff_m,
+                    *at_m,
+                    forward,
+                    *speed_mps,
+                ));
+            }
+            TaskSpec::FollowWall {
+                wall,
+                standoff_m,
+                from_m,
+                to_m,
+                speed_mps,
+            } => {
+                let g = WallGeometry::of(*wall, est.room_m);
+                let forward = to_m > from_m;
+                let front = self.config.vehicle.length_m - self.config.vehicle.rear_overhang_m;
+                let room_left = if forward { g.length_m - to_m } else { *to_m };
+                if room_left < front + 0.1 {
+                    return Err(format!(
+                        "follow_wall: the pass ends {room_left:.2} m from the wall's end; the body reaches {front:.2} m ahead"
+                    ));
+                }
+                let side = g.side_for(forward);
+                let start = pose_at_wall(*wall, est.room_m, *from_m, *standoff_m, side);
+                queue.extend(self.approach(&pose, &start, *wall, est, clearance, *speed_mps)?);
+                queue.push_back(Behaviour::follow_wall(
+                    gains,
+                    *wall,
+                    side,
+                    *standoff_m,
+                    *to_m,
+                    forward,
+                    *speed_mps,
+                ));
+            }
+            TaskSpec::PassDoor {
+                door,
+                approach_m,
+                beyond_m,
+                speed_mps,
+            } => {
+                let Some(d) = est.doors.get(*door) else {
+                    return Err(format!(
+                        "pass_door: door {door} is not known ({} doors found)",
+                        est.doors.len()
+                    ));
+                };
+                let g = WallGeometry::of(d.wall, est.room_m);
+                let heading = (-g.inward.y).atan2(-g.inward.x);
+                let a = g.point(d.position_m, *approach_m);
+                let b = g.point(d.position_m, -*beyond_m);
+                queue.extend(go_to(
+                    gains,
+                    &pose,
+                    &Pose2::new(a.x, a.y, heading),
+                    *speed_mps,
+                ));
+                queue.push_back(Behaviour::regulate(
+                    gains,
+                    Pose2::new(b.x, b.y, heading),
+                    *speed_mps,
+                ));
+            }
+        }
+        self.continue_asked = false;
+        if let TaskSpec::WaitForOperator { prompt, .. } = &self.tasks[index] {
+            let prompt = prompt.clone();
+            self.emit(
+                now,
+                EventKind::OperatorPrompt {
+                    task: index,
+                    prompt,
+                },
+            );
+        }
+        Ok(ActiveTask {
+            index,
+            started: now,
+            queue,
+            current: None,
+            loops: 0,
+            blocked_s: 0.0,
+        })
+    }
+
+    /// Radius the body sweeps turning on the spot, with a margin, m.
+    fn pivot_clearance(&self) -> f64 {
+        let v = &self.config.vehicle;
+        (v.length_m - v.rear_overhang_m).hypot(0.5 * v.width_m) + 0.1
+    }
+
+    /// The way onto a pose beside `wall`: to a point `RUN_IN_M` before it,
+    /// far enough from every wall to turn on the spot, turned to the
+    /// goal's heading there; the wall law takes it from there.
+    fn approach(
+        &self,
+        from: &Pose2,
+        goal: &Pose2,
+        wall: crate::task::WallName,
+        est: &Estimate,
+        clearance: f64,
+        speed_mps: f64,
+    ) -> Result<Vec<Behaviour>, String> {
+        let g = WallGeometry::of(wall, est.room_m);
+        let gp = goal.position().coords;
+        let dir = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
+        let forward = g.along.dot(&dir) > 0.0;
+        let at = g.position(&gp);
+        let standoff = g.distance(&gp);
+        let lo = clearance;
+        let hi = g.length_m - clearance;
+        let want = if forward {
+            at - RUN_IN_M
+        } else {
+            at + RUN_IN_M
+        };
+        if lo > hi {
+            return Err("the room is too small to turn in".to_owned());
+        }
+        let p_at = want.clamp(lo, hi);
+        let run_in = (at - p_at).abs();
+        if run_in < MIN_RUN_IN_M || (forward && p_at > at) || (!forward && p_at < at) {
+            return Err(format!(
+                "the pass starts {at:.2} m along the wall: too near the corner to turn onto it \
+                 (a turn needs {clearance:.2} m from the walls and {MIN_RUN_IN_M:.1} m of run-in)"
+            ));
+        }
+        let p = g.point(p_at, standoff.max(clearance));
+        Ok(go_to(
+            &self.config.gains,
+            from,
+            &Pose2::new(p.x, p.y, goal.theta),
+            speed_mps,
+        ))
+    }
+
+    /// Steps the active task.
+    fn step_task(&mut self, now: Stamp, est: &Estimate) -> TaskStep {
+        let vehicle = self.config.vehicle.clone();
+        let gains = self.config.gains.clone();
+        let continue_asked = self.continue_asked;
+        let Some(a) = self.active.as_mut() else {
+            return TaskStep::Done;
+        };
+        let spec = &self.tasks[a.index];
+        let elapsed = now.seconds_since(a.started);
+        // Task-level ends: timeouts and the conditions behaviours do not see.
+        match spec {
+            TaskSpec::MapRoom {
+                timeout_s,
+                max_size_sigma_m,
+                path,
+                inset_m,
+                speed_mps,
+            } => {
+                if elapsed > *timeout_s {
+                    return TaskStep::Failed(format!(
+                        "map_room: the room's size is known to {:.1} mm after {timeout_s} s",
+                        1e3 * est.room_sigma_m[0].max(est.room_sigma_m[1])
+                    ));
+                }
+                let known = est.room_sigma_m.iter().all(|s| s <= max_size_sigma_m);
+                if a.current.is_none() && a.queue.is_empty() {
+                    a.loops += 1;
+                    if known {
+                        return TaskStep::Done;
+                    }
+                    // Another loop, from its first corner turned toward the
+                    // second: each one sees the walls again.
+                    match survey_loop(path.as_deref(), *inset_m, est.room_m) {
+                        Ok(l) => {
+                            let towards = (l[1][1] - l[0][1]).atan2(l[1][0] - l[0][0]);
+                            let corner = Pose2::new(l[0][0], l[0][1], towards);
+                            a.queue
+                                .extend(go_to(&gains, &est.pose, &corner, *speed_mps));
+                            a.queue
+                                .push_back(Behaviour::path(&gains, closed(&l), *speed_mps));
+                        }
+                        Err(e) => return TaskStep::Failed(e),
+                    }
+                }
+            }
+            TaskSpec::Localize {
+                max_sigma_m,
+                timeout_s,
+            } => {
+                if est.position_sigma_m <= *max_sigma_m {
+                    return TaskStep::Done;
+                }
+                if elapsed > *timeout_s {
+                    return TaskStep::Failed(format!(
+                        "localize: the position is known to {:.1} mm after {timeout_s} s",
+                        1e3 * est.position_sigma_m
+                    ));
+                }
+            }
+            TaskSpec::WaitForOperator {
+                timeout_s,
+                on_timeout,
+                ..
+            } => {
+                if continue_asked {
+                    return TaskStep::Done;
+                }
+                if timeout_s.is_some_and(|t| elapsed > t) {
+                    return match on_timeout {
+                        OnTimeout::Continue => TaskStep::Done,
+                        OnTimeout::Fail => {
+                            TaskStep::Failed("wait_for_operator: nobody answered".to_owned())
+                        }
+                    };
+                }
+            }
+            _ => {}
+        }
+        loop {
+            if a.current.is_none() {
+                let Some(next) = a.queue.pop_front() else {
+                    // Motion tasks end with their last behaviour.
+                    return TaskStep::Done;
+                };
+                self.events.push(Event {
+                    stamp: now,
+                    kind: EventKind::BehaviourStarted {
+                        task: a.index,
+                        behaviour: next.name().to_owned(),
+                    },
+                });
+                a.current = Some(next);
+            }
+            let Some(b) = a.current.as_mut() else {
+                continue;
+            };
+            match b.step(now, est, &vehicle) {
+                Step::Drive(cmd) => return TaskStep::Drive(cmd),
+                Step::Done => {
+                    a.current = None;
+                    if a.queue.is_empty() {
+                        // Let the task-level check decide on the next tick
+                        // (a survey may loop again); stand still meanwhile.
+                        if matches!(spec, TaskSpec::MapRoom { .. }) {
+                            return TaskStep::Drive(DriveCommand::STOP);
+                        }
+                        return TaskStep::Done;
+                    }
+                }
+            }
+        }
+    }
+}
+
+enum TaskStep {
+    Drive(DriveCommand),
+    Done,
+    Failed(String),
+}
+
+/// The survey loop: the given path or a rectangle `inset_m` inside the
+/// room.
+fn survey_loop(
+    path: Option<&[[f64; 2]]>,
+    inset_m: f64,
+    room_m: [f64; 2],
+) -> Result<Vec<[f64; 2]>, String> {
+    if let Some(p) = path {
+        return Ok(p.to_vec());
+    }
+    let [xs, ys] = room_m;
+    if 2.0 * inset_m >= xs.min(ys) {
+        return Err(format!(
+            "map_room: an inset of {inset_m} m leaves no loop in a {xs:.2} × {ys:.2} m room"
+        ));
+    }
+    Ok(vec![
+        [inset_m, inset_m],
+        [xs - inset_m, inset_m],
+        [xs - inset_m, ys - inset_m],
+        [inset_m, ys - inset_m],
+    ])
+}
+
+/// The loop closed on its first point.
+fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let mut p = points.to_vec();
+    if let Some(&first) = points.first() {
+        p.push(first);
+    }
+    p
+}

@@ -1,0 +1,38 @@
+//! The mission executive of stucco: the layer the users touch.
+//!
+//! A mission is a list of tasks ([`TaskSpec`], from a mission file or the
+//! operator). The [`Executive`] carries them out in layers, each explicit
+//! in the code and in the state it reports:
+//!
+//! - mission: [`MissionMode`] — running, paused, e-stopped, done, failed,
+//!   aborted — and each task's [`TaskStatus`];
+//! - task: plans its behaviours from the estimate when it starts, and
+//!   decides when it is done (a room's size known, an operator's answer);
+//! - behaviour ([`Behaviour`]): a turn on the spot, a line to a pose, a
+//!   wall followed at a standoff, a path — each one law of
+//!   `stucco-control`, reused by every task that needs it;
+//! - control law: the command.
+//!
+//! The [`Supervisor`] sees every command last and may stop it: an obstacle
+//! in the protective field, the estimate lost, a bumper, the e-stop.
+//! [`Progress`] is what a checkpoint keeps, so a mission started again
+//! resumes where it stopped.
+//!
+//! Pure: time comes in with each [`Executive::tick`], nothing is read from
+//! a clock or written to disk here.
+#![warn(missing_docs)]
+
+mod behaviour;
+mod executive;
+mod model;
+mod supervisor;
+mod task;
+
+pub use behaviour::{Behaviour, BehaviourKind, PivotPhase, Step, go_to};
+pub use executive::{
+    Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode, OperatorCommand, Outputs,
+    Progress, ProgressMismatch, TaskStatus,
+};
+pub use model::{DoorEstimate, Estimate, WallGeometry, pose_at_wall};
+pub use supervisor::{Hazard, LostPolicy, SafetyConfig, Supervisor, Verdict};
+pub use task::{OnTimeout, Side, TaskSpec, WallName};

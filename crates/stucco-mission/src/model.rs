@@ -1,0 +1,169 @@
+//! What the executive knows of the robot and the room: the navigation
+//! core's estimate, in the room frame, and the geometry of the walls.
+
+use crate::task::{Side, WallName};
+use nalgebra::Vector2;
+use serde::Serialize;
+use stucco_core::{Pose2, Stamp};
+
+/// A door of the room as the robot knows it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DoorEstimate {
+    /// The wall it is in.
+    pub wall: WallName,
+    /// Its centre along the wall, m.
+    pub position_m: f64,
+    /// Its width, m.
+    pub width_m: f64,
+    /// Standard deviation of its position, m.
+    pub sigma_m: f64,
+}
+
+/// The navigation core's estimate, as the executive reads it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Estimate {
+    /// When it holds.
+    pub stamp: Stamp,
+    /// The rear axle's pose in the room frame.
+    pub pose: Pose2,
+    /// Standard deviation of the position along its worst axis, m.
+    pub position_sigma_m: f64,
+    /// Standard deviation of the heading, rad.
+    pub heading_sigma_rad: f64,
+    /// The room's size, `(xs, ys)`, m.
+    pub room_m: [f64; 2],
+    /// Its standard deviation, m.
+    pub room_sigma_m: [f64; 2],
+    /// The doors known.
+    pub doors: Vec<DoorEstimate>,
+}
+
+/// A wall of the rectangular room: where its axis starts, which way it
+/// runs, and its normal into the room.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallGeometry {
+    /// The point at position 0 along the wall.
+    pub origin: Vector2<f64>,
+    /// Unit vector along the wall (x or y).
+    pub along: Vector2<f64>,
+    /// Unit normal pointing into the room.
+    pub inward: Vector2<f64>,
+    /// Length of the wall, m.
+    pub length_m: f64,
+}
+
+impl WallGeometry {
+    /// The wall `w` of a room `room_m` in size.
+    pub fn of(w: WallName, room_m: [f64; 2]) -> Self {
+        let [xs, ys] = room_m;
+        let (origin, along, inward, length_m) = match w {
+            WallName::West => ((0.0, 0.0), (0.0, 1.0), (1.0, 0.0), ys),
+            WallName::South => ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), xs),
+            WallName::East => ((xs, 0.0), (0.0, 1.0), (-1.0, 0.0), ys),
+            WallName::North => ((0.0, ys), (1.0, 0.0), (0.0, -1.0), xs),
+        };
+        WallGeometry {
+            origin: Vector2::new(origin.0, origin.1),
+            along: Vector2::new(along.0, along.1),
+            inward: Vector2::new(inward.0, inward.1),
+            length_m,
+        }
+    }
+
+    /// Distance of `p` from the wall, positive inside the room, m.
+    pub fn distance(&self, p: &Vector2<f64>) -> f64 {
+        self.inward.dot(&(p - self.origin))
+    }
+
+    /// Position of `p` along the wall, m.
+    pub fn position(&self, p: &Vector2<f64>) -> f64 {
+        self.along.dot(&(p - self.origin))
+    }
+
+    /// The point `standoff_m` into the room at `at_m` along the wall.
+    pub fn point(&self, at_m: f64, standoff_m: f64) -> Vector2<f64> {
+        self.origin + self.along * at_m + self.inward * standoff_m
+    }
+
+    /// The heading that keeps the wall on `side`.
+    pub fn heading(&self, side: Side) -> f64 {
+        let n = self.inward;
+        // Left of a heading h is h turned +90°; the wall lies at −inward.
+        let h = match side {
+            Side::Left => Vector2::new(-n.y, n.x),
+            Side::Right => Vector2::new(n.y, -n.x),
+        };
+        h.y.atan2(h.x)
+    }
+
+    /// The side the wall is on for a robot running toward increasing
+    /// (`forward`) or decreasing positions along it.
+    pub fn side_for(&self, forward: bool) -> Side {
+        let h_left = self.heading(Side::Left);
+        let left_runs_forward = self.along.dot(&Vector2::new(h_left.cos(), h_left.sin())) > 0.0;
+        if left_runs_forward == forward {
+            Side::Left
+        } else {
+            Side::Right
+        }
+    }
+
+    /// The wall as the line `n(γ)·p = d` seen from `pose` (its rear axle,
+    /// robot frame): `d` the distance, `γ` the direction toward it.
+    pub fn seen_from(&self, pose: &Pose2) -> (f64, f64) {
+        let p = pose.position().coords;
+        let d = self.distance(&p);
+        let toward = -self.inward;
+        let gamma = toward.y.atan2(toward.x) - pose.theta;
+        (d, stucco_core::wrap_angle(gamma))
+    }
+}
+
+/// The pose `standoff_m` from wall `w` at `at_m` along it, the wall on
+/// `side`.
+pub fn pose_at_wall(
+    w: WallName,
+    room_m: [f64; 2],
+    at_m: f64,
+    standoff_m: f64,
+    side: Side,
+) -> Pose2 {
+    let g = WallGeometry::of(w, room_m);
+    let p = g.point(at_m, standoff_m);
+    Pose2::new(p.x, p.y, g.heading(side))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn walls_know_their_sides() {
+        let room = [5.0, 3.0];
+        // Along the south wall eastward, the wall is on the right.
+        let s = WallGeometry::of(WallName::South, room);
+        assert_eq!(s.side_for(true), Side::Right);
+        assert!((s.heading(Side::Right) - 0.0).abs() < 1e-12);
+        // Along the north wall westward, the wall is on the right too.
+        let n = WallGeometry::of(WallName::North, room);
+        assert_eq!(n.side_for(false), Side::Right);
+        assert!((n.heading(Side::Right).abs() - PI).abs() < 1e-12);
+        // The west wall northward is on the left.
+        let w = WallGeometry::of(WallName::West, room);
+        assert_eq!(w.side_for(true), Side::Left);
+        assert!((w.heading(Side::Left) - FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_wall_seen_from_the_robot() {
+        let e = WallGeometry::of(WallName::East, [5.0, 3.0]);
+        // 1 m from the east wall, facing north: the wall is on the right.
+        let (d, g) = e.seen_from(&Pose2::new(4.0, 1.0, FRAC_PI_2));
+        assert!((d - 1.0).abs() < 1e-12);
+        assert!((g + FRAC_PI_2).abs() < 1e-12);
+        let p = pose_at_wall(WallName::East, [5.0, 3.0], 2.0, 0.6, Side::Right);
+        assert!((p.x - 4.4).abs() < 1e-12 && (p.y - 2.0).abs() < 1e-12);
+        assert!((p.theta - FRAC_PI_2).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,316 @@
+//! The safety supervisor: it sees every command before the platform does
+//! and may stop it — an obstacle where the robot is about to be, a bumper,
+//! the e-stop, an estimate too uncertain to drive or spray on.
+
+use crate::model::Estimate;
+use nalgebra::Point2;
+use serde::{Deserialize, Serialize};
+use stucco_core::{DriveCommand, VehicleSpec};
+
+/// What to do when the pose estimate is lost (its σ past the limits).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LostPolicy {
+    /// Stand still until the estimate is back, failing after
+    /// `lost_timeout_s`.
+    #[default]
+    Hold,
+    /// Keep driving (never spraying) and hope the walls come back.
+    Continue,
+    /// Fail the mission at once.
+    Fail,
+}
+
+/// The supervisor's settings (a mission file's `[failsafe]` table).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SafetyConfig {
+    /// Extra length of the protective field ahead of the body, beyond the
+    /// stopping distance, m.
+    pub obstacle_margin_m: f64,
+    /// Extra width of the field either side of the body, m.
+    pub lateral_margin_m: f64,
+    /// Deceleration the stopping distance is reckoned with, m/s².
+    pub stop_decel_mps2: f64,
+    /// The field must stay clear this long before driving on, s.
+    pub clear_s: f64,
+    /// The estimate is lost when its position σ exceeds this, m.
+    pub max_position_sigma_m: f64,
+    /// Or its heading σ this, rad.
+    pub max_heading_sigma_rad: f64,
+    /// What to do then.
+    pub on_lost: LostPolicy,
+    /// How long `hold` waits for the estimate, s.
+    pub lost_timeout_s: f64,
+    /// Spraying only with the position known to this, m (σ).
+    pub spray_max_sigma_m: f64,
+    /// How long an obstacle may block the way before the task fails, s.
+    pub blocked_timeout_s: f64,
+}
+
+impl Default for SafetyConfig {
+    fn default() -> Self {
+        SafetyConfig {
+            obstacle_margin_m: 0.15,
+            lateral_margin_m: 0.05,
+            stop_decel_mps2: 0.8,
+            clear_s: 0.5,
+            max_position_sigma_m: 0.05,
+            max_heading_sigma_rad: 0.035,
+            on_lost: LostPolicy::Hold,
+            lost_timeout_s: 10.0,
+            spray_max_sigma_m: 0.01,
+            blocked_timeout_s: 30.0,
+        }
+    }
+}
+
+impl SafetyConfig {
+    /// The first value out of its range: the key and why.
+    pub fn invalid(&self) -> Option<(&'static str, &'static str)> {
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let checks = [
+            ("obstacle_margin_m", non_negative(self.obstacle_margin_m)),
+            ("lateral_margin_m", non_negative(self.lateral_margin_m)),
+            ("stop_decel_mps2", positive(self.stop_decel_mps2)),
+            ("clear_s", non_negative(self.clear_s)),
+            ("max_position_sigma_m", positive(self.max_position_sigma_m)),
+            (
+                "max_heading_sigma_rad",
+                positive(self.max_heading_sigma_rad),
+            ),
+            ("lost_timeout_s", positive(self.lost_timeout_s)),
+            ("spray_max_sigma_m", positive(self.spray_max_sigma_m)),
+            ("blocked_timeout_s", positive(self.blocked_timeout_s)),
+        ];
+        checks
+            .into_iter()
+            .find(|(_, ok)| !ok)
+            .map(|(k, _)| (k, "must be a number in range (margins ≥ 0, the rest > 0)"))
+    }
+}
+
+/// Why the supervisor stopped the robot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Hazard {
+    /// Something in the protective field.
+    Obstacle,
+    /// The pose estimate is too uncertain to drive on.
+    Lost,
+}
+
+/// The supervisor's verdict on one command.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Verdict {
+    /// The command to send.
+    pub drive: DriveCommand,
+    /// What stopped it, if anything did.
+    pub hazard: Option<Hazard>,
+}
+
+/// The safety supervisor.
+#[derive(Clone, Debug)]
+pub struct Supervisor {
+    config: SafetyConfig,
+    vehicle: VehicleSpec,
+    /// Seconds the field has been clear since it last held something.
+    clear_for_s: f64,
+    lost: bool,
+}
+
+impl Supervisor {
+    /// The supervisor of `vehicle` with `config`.
+    pub fn new(config: SafetyConfig, vehicle: VehicleSpec) -> Self {
+        Supervisor {
+            config,
+            vehicle,
+            clear_for_s: f64::INFINITY,
+            lost: false,
+        }
+    }
+
+    /// Its settings.
+    pub fn config(&self) -> &SafetyConfig {
+        &self.config
+    }
+
+    /// True when the estimate is good enough to spray on.
+    pub fn spray_allowed(&self, est: &Estimate) -> bool {
+        !self.lost && est.position_sigma_m <= self.config.spray_max_sigma_m
+    }
+
+    /// True while the estimate counts as lost (with hysteresis: it comes
+    /// back at 80% of the limits).
+    pub fn lost(&self) -> bool {
+        self.lost
+    }
+
+    /// Updates the lost flag from `est`; returns it.
+    pub fn watch_estimate(&mut self, est: &Estimate) -> bool {
+        let c = &self.config;
+        let k = if self.lost { 0.8 } else { 1.0 };
+        self.lost = !(est.position_sigma_m <= k * c.max_position_sigma_m
+            && est.heading_sigma_rad <= k * c.max_heading_sigma_rad);
+        self.lost
+    }
+
+    /// True when an obstacle point (robot frame, rear axle at the origin)
+    /// lies where `cmd` takes the body within its stopping distance.
+    pub fn blocked(&self, cmd: &DriveCommand, obstacles: &[Point2<f64>]) -> bool {
+        let v = &self.vehicle;
+        let c = &self.config;
+        let front = v.length_m - v.rear_overhang_m;
+        let half = 0.5 * v.width_m + c.lateral_margin_m;
+        if cmd.speed_mps == 0.0 {
+            return false;
+        }
+        if cmd.steer_rad.abs() > 1.0 {
+            // Turning on the spot: the front corners sweep a circle.
+            let r = front.hypot(0.5 * v.width_m) + c.lateral_margin_m;
+            return obstacles.iter().any(|p| p.coords.norm() <= r);
+        }
+        let s = cmd.speed_mps.abs();
+        let reach = s * s / (2.0 * c.stop_decel_mps2) + c.obstacle_margin_m + 0.1 * s;
+        let (lo, hi) = if cmd.speed_mps > 0.0 {
+            (front, front + reach)
+        } else {
+            (-v.rear_overhang_m - reach, -v.rear_overhang_m)
+        };
+        // The field bends with the steering: check each point against the
+        // body's path, approximated by the chord in the wheel's direction
+        // over the field's length.
+        let turn = cmd.steer_rad.sin() / v.wheelbase_m;
+        obstacles.iter().any(|p| {
+            let ahead = p.x;
+            if ahead < lo || ahead > hi {
+                return false;
+            }
+            // Lateral drift of the path at that distance (arc ≈ ½κx²).
+            let drift = 0.5 * turn * ahead * ahead;
+            (p.y - drift).abs() <= half
+        })
+    }
+
+    /// Checks `cmd` against the obstacles seen and the estimate; `dt_s`
+    /// since the last check.
+    pub fn check(
+        &mut self,
+        cmd: DriveCommand,
+        obstacles: &[Point2<f64>],
+        est: &Estimate,
+        dt_s: f64,
+    ) -> Verdict {
+        let lost = self.watch_estimate(est);
+        if lost && self.config.on_lost != LostPolicy::Continue {
+            return Verdict {
+                drive: DriveCommand::STOP,
+                hazard: Some(Hazard::Lost),
+            };
+        }
+        if self.blocked(&cmd, obstacles) {
+            self.clear_for_s = 0.0;
+        } else {
+            self.clear_for_s += dt_s;
+        }
+        if self.clear_for_s < self.config.clear_s {
+            return Verdict {
+                drive: DriveCommand {
+                    speed_mps: 0.0,
+                    steer_rad: cmd.steer_rad,
+                },
+                hazard: Some(Hazard::Obstacle),
+            };
+        }
+        Verdict {
+            drive: cmd,
+            hazard: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use stucco_core::{Pose2, Stamp};
+
+    fn estimate(sigma: f64) -> Estimate {
+        Estimate {
+            stamp: Stamp::ZERO,
+            pose: Pose2::new(1.0, 1.0, 0.0),
+            position_sigma_m: sigma,
+            heading_sigma_rad: 0.001,
+            room_m: [5.0, 3.0],
+            room_sigma_m: [0.01; 2],
+            doors: Vec::new(),
+        }
+    }
+
+    const FORWARD: DriveCommand = DriveCommand {
+        speed_mps: 0.5,
+        steer_rad: 0.0,
+    };
+
+    #[test]
+    fn something_ahead_stops_the_robot_and_it_waits_for_a_clear_field() {
+        let mut s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
+        let est = estimate(0.005);
+        // Front at 0.75 m; at 0.5 m/s the field reaches 0.75 + 0.156 + 0.15 + 0.05.
+        let person = [Point2::new(1.0, 0.1)];
+        let v = s.check(FORWARD, &person, &est, 0.02);
+        assert_eq!(v.hazard, Some(Hazard::Obstacle));
+        assert_eq!(v.drive.speed_mps, 0.0);
+        // Gone: still stopped until the field has been clear for 0.5 s.
+        let mut t = 0.0f64;
+        while s.check(FORWARD, &[], &est, 0.02).hazard.is_some() {
+            t += 0.02;
+            assert!(t < 1.0);
+        }
+        assert!((t - 0.48).abs() < 0.03, "{t}");
+        // Beside the path, or beyond the field: no stop.
+        assert!(!s.blocked(&FORWARD, &[Point2::new(1.0, 0.5)]));
+        assert!(!s.blocked(&FORWARD, &[Point2::new(1.5, 0.0)]));
+        // Standing still: nothing blocks.
+        assert!(!s.blocked(&DriveCommand::STOP, &person));
+    }
+
+    #[test]
+    fn a_pivot_is_blocked_by_anything_within_the_swept_circle() {
+        let s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
+        let pivot = DriveCommand {
+            speed_mps: 0.2,
+            steer_rad: 1.57,
+        };
+        assert!(s.blocked(&pivot, &[Point2::new(0.0, 0.8)]));
+        assert!(!s.blocked(&pivot, &[Point2::new(0.0, 0.9)]));
+    }
+
+    #[test]
+    fn a_lost_estimate_stops_and_comes_back_with_hysteresis() {
+        let mut s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
+        assert_eq!(
+            s.check(FORWARD, &[], &estimate(0.06), 0.02).hazard,
+            Some(Hazard::Lost)
+        );
+        assert!(!s.spray_allowed(&estimate(0.06)));
+        // Under the limit but above 80% of it: still lost.
+        assert_eq!(
+            s.check(FORWARD, &[], &estimate(0.045), 0.02).hazard,
+            Some(Hazard::Lost)
+        );
+        assert_eq!(s.check(FORWARD, &[], &estimate(0.03), 0.02).hazard, None);
+        assert!(!s.spray_allowed(&estimate(0.03)));
+        assert!(s.spray_allowed(&estimate(0.008)));
+        let mut go_on = Supervisor::new(
+            SafetyConfig {
+                on_lost: LostPolicy::Continue,
+                ..SafetyConfig::default()
+            },
+            VehicleSpec::default(),
+        );
+        let v = go_on.check(FORWARD, &[], &estimate(0.2), 0.02);
+        assert_eq!(v.drive, FORWARD);
+        assert!(!go_on.spray_allowed(&estimate(0.2)));
+    }
+}

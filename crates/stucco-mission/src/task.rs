@@ -1,0 +1,411 @@
+//! The tasks a mission is made of, as a mission file writes them
+//! (`[[task]]` tables with `task = "follow_wall"` and the task's fields).
+
+use serde::{Deserialize, Serialize};
+
+/// A wall of the current room, by the side of the room it closes.
+///
+/// The room frame has its origin in the room's south-west corner, x east
+/// and y north, as the room filter keeps it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WallName {
+    /// `x = 0`.
+    West,
+    /// `y = 0`.
+    South,
+    /// `x = xs`.
+    East,
+    /// `y = ys`.
+    North,
+}
+
+impl WallName {
+    /// The four walls, in the room filter's order.
+    pub const ALL: [WallName; 4] = [
+        WallName::West,
+        WallName::South,
+        WallName::East,
+        WallName::North,
+    ];
+
+    /// The room filter's index of the wall (0: x = 0, 1: y = 0, 2: x = xs,
+    /// 3: y = ys).
+    pub fn index(self) -> usize {
+        match self {
+            WallName::West => 0,
+            WallName::South => 1,
+            WallName::East => 2,
+            WallName::North => 3,
+        }
+    }
+
+    /// The wall of filter index `i`.
+    pub fn from_index(i: usize) -> Option<WallName> {
+        WallName::ALL.get(i).copied()
+    }
+}
+
+/// Which side of the robot a wall is on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Side {
+    /// On the robot's left.
+    #[default]
+    Left,
+    /// On its right.
+    Right,
+}
+
+/// What a [`TaskSpec::WaitForOperator`] does when nobody answers in time.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OnTimeout {
+    /// The mission goes on (for unattended runs).
+    Continue,
+    /// The task fails, and with it the mission.
+    #[default]
+    Fail,
+}
+
+fn survey_speed() -> f64 {
+    0.4
+}
+fn survey_inset() -> f64 {
+    1.0
+}
+fn size_sigma() -> f64 {
+    0.005
+}
+fn map_timeout() -> f64 {
+    180.0
+}
+fn localize_sigma() -> f64 {
+    0.02
+}
+fn localize_timeout() -> f64 {
+    20.0
+}
+fn drive_speed() -> f64 {
+    0.3
+}
+fn follow_speed() -> f64 {
+    0.25
+}
+fn approach() -> f64 {
+    1.0
+}
+fn beyond() -> f64 {
+    1.0
+}
+
+/// One task of a mission. Positions are in the room frame (see
+/// [`WallName`]); a position along a wall runs along its axis (y for the
+/// west and east walls, x for the south and north ones).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "task", rename_all = "snake_case", deny_unknown_fields)]
+pub enum TaskSpec {
+    /// Observes every wall of the room while driving a loop inside it,
+    /// until the room's size is known to `max_size_sigma_m`: walls, size,
+    /// and the doors seen on the way.
+    MapRoom {
+        /// The loop, room frame, m; by default a rectangle `inset_m` inside
+        /// the walls.
+        #[serde(default)]
+        path: Option<Vec<[f64; 2]>>,
+        /// Distance of the default loop from the walls, m.
+        #[serde(default = "survey_inset")]
+        inset_m: f64,
+        /// Speed, m/s.
+        #[serde(default = "survey_speed")]
+        speed_mps: f64,
+        /// Done when both sides of the room are known to this, m (σ).
+        #[serde(default = "size_sigma")]
+        max_size_sigma_m: f64,
+        /// Fails after this long, s.
+        #[serde(default = "map_timeout")]
+        timeout_s: f64,
+    },
+    /// Stands still until the pose is known to `max_sigma_m` in the known
+    /// map.
+    Localize {
+        /// Done when the position is known to this, m (σ, the larger axis).
+        #[serde(default = "localize_sigma")]
+        max_sigma_m: f64,
+        /// Fails after this long, s.
+        #[serde(default = "localize_timeout")]
+        timeout_s: f64,
+    },
+    /// Moves by `(dx, dy, dθ)` in the robot's frame at the task's start.
+    MoveRelative {
+        /// Forward, m.
+        dx_m: f64,
+        /// To the left, m.
+        #[serde(default)]
+        dy_m: f64,
+        /// Turn, degrees counter-clockwise.
+        #[serde(default)]
+        dtheta_deg: f64,
+        /// Speed, m/s.
+        #[serde(default = "drive_speed")]
+        speed_mps: f64,
+    },
+    /// Stops parallel to `wall` at `standoff_m`, at `at_m` along it, the
+    /// wall on `side`.
+    AlignToWall {
+        /// The wall.
+        wall: WallName,
+        /// Distance from the wall to the rear axle's middle, m.
+        standoff_m: f64,
+        /// Position along the wall, m.
+        at_m: f64,
+        /// Which side of the robot the wall ends up on.
+        #[serde(default)]
+        side: Side,
+        /// Speed, m/s.
+        #[serde(default = "drive_speed")]
+        speed_mps: f64,
+    },
+    /// Follows `wall` at `standoff_m` from `from_m` to `to_m` along it (the
+    /// direction sets which side the wall is on).
+    FollowWall {
+        /// The wall.
+        wall: WallName,
+        /// Distance from the wall to the rear axle's middle, m.
+        standoff_m: f64,
+        /// Where the pass starts, m along the wall.
+        from_m: f64,
+        /// Where it ends, m along the wall.
+        to_m: f64,
+        /// Speed, m/s.
+        #[serde(default = "follow_speed")]
+        speed_mps: f64,
+    },
+    /// Drives through a door of the room (by its index among the doors the
+    /// robot knows, in the order they were found or given).
+    PassDoor {
+        /// The door.
+        door: usize,
+        /// Distance before the door where the approach line starts, m.
+        #[serde(default = "approach")]
+        approach_m: f64,
+        /// Distance beyond the door where the task ends, m.
+        #[serde(default = "beyond")]
+        beyond_m: f64,
+        /// Speed, m/s.
+        #[serde(default = "drive_speed")]
+        speed_mps: f64,
+    },
+    /// Stops and waits for the operator's `continue`.
+    WaitForOperator {
+        /// What the operator is asked.
+        prompt: String,
+        /// Gives up after this long, s (never, without it).
+        #[serde(default)]
+        timeout_s: Option<f64>,
+        /// What giving up means.
+        #[serde(default)]
+        on_timeout: OnTimeout,
+    },
+}
+
+impl TaskSpec {
+    /// The task's name as the mission file writes it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            TaskSpec::MapRoom { .. } => "map_room",
+            TaskSpec::Localize { .. } => "localize",
+            TaskSpec::MoveRelative { .. } => "move_relative",
+            TaskSpec::AlignToWall { .. } => "align_to_wall",
+            TaskSpec::FollowWall { .. } => "follow_wall",
+            TaskSpec::PassDoor { .. } => "pass_door",
+            TaskSpec::WaitForOperator { .. } => "wait_for_operator",
+        }
+    }
+
+    /// The first value out of its range: the key and why.
+    pub fn invalid(&self) -> Option<(&'static str, &'static str)> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let finite = |v: f64| v.is_finite();
+        let speed = |v: f64| positive(v) && v <= 0.8;
+        const SPEED: &str = "must be positive and at most the robot's 0.8 m/s";
+        match self {
+            TaskSpec::MapRoom {
+                path,
+                inset_m,
+                speed_mps,
+                max_size_sigma_m,
+                timeout_s,
+            } => {
+                if let Some(p) = path
+                    && (p.len() < 3 || !p.iter().flatten().all(|&v| finite(v)))
+                {
+                    return Some(("path", "at least three points, each finite"));
+                }
+                if !positive(*inset_m) {
+                    return Some(("inset_m", "must be positive"));
+                }
+                if !speed(*speed_mps) {
+                    return Some(("speed_mps", SPEED));
+                }
+                if !positive(*max_size_sigma_m) {
+                    return Some(("max_size_sigma_m", "must be positive"));
+                }
+                if !positive(*timeout_s) {
+                    return Some(("timeout_s", "must be positive"));
+                }
+            }
+            TaskSpec::Localize {
+                max_sigma_m,
+                timeout_s,
+            } => {
+                if !positive(*max_sigma_m) {
+                    return Some(("max_sigma_m", "must be positive"));
+                }
+                if !positive(*timeout_s) {
+                    return Some(("timeout_s", "must be positive"));
+                }
+            }
+            TaskSpec::MoveRelative {
+                dx_m,
+                dy_m,
+                dtheta_deg,
+                speed_mps,
+            } => {
+                if !(finite(*dx_m) && finite(*dy_m) && finite(*dtheta_deg)) {
+                    return Some(("dx_m", "the motion must be finite"));
+                }
+                if !speed(*speed_mps) {
+                    return Some(("speed_mps", SPEED));
+                }
+            }
+            TaskSpec::AlignToWall {
+                standoff_m,
+                at_m,
+                speed_mps,
+                ..
+            } => {
+                if !positive(*standoff_m) {
+                    return Some(("standoff_m", "must be positive"));
+                }
+                if !finite(*at_m) {
+                    return Some(("at_m", "must be a number"));
+                }
+                if !speed(*speed_mps) {
+                    return Some(("speed_mps", SPEED));
+                }
+            }
+            TaskSpec::FollowWall {
+                standoff_m,
+                from_m,
+                to_m,
+                speed_mps,
+                ..
+            } => {
+                if !positive(*standoff_m) {
+                    return Some(("standoff_m", "must be positive"));
+                }
+                if !(finite(*from_m) && finite(*to_m)) || (from_m - to_m).abs() < 0.1 {
+                    return Some(("to_m", "the pass must be at least 0.1 m long"));
+                }
+                if !speed(*speed_mps) {
+                    return Some(("speed_mps", SPEED));
+                }
+            }
+            TaskSpec::PassDoor {
+                approach_m,
+                beyond_m,
+                speed_mps,
+                ..
+            } => {
+                if !positive(*approach_m) {
+                    return Some(("approach_m", "must be positive"));
+                }
+                if !positive(*beyond_m) {
+                    return Some(("beyond_m", "must be positive"));
+                }
+                if !speed(*speed_mps) {
+                    return Some(("speed_mps", SPEED));
+                }
+            }
+            TaskSpec::WaitForOperator { timeout_s, .. } => {
+                if timeout_s.is_some_and(|t| !positive(t)) {
+                    return Some(("timeout_s", "must be positive"));
+                }
+            }
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct File {
+        task: Vec<TaskSpec>,
+    }
+
+    #[test]
+    fn tasks_read_from_toml_with_their_defaults() {
+        let f: File = toml::from_str(
+            r#"
+            [[task]]
+            task = "map_room"
+
+            [[task]]
+            task = "follow_wall"
+            wall = "south"
+            standoff_m = 0.6
+            from_m = 2.4
+            to_m = 4.0
+
+            [[task]]
+            task = "wait_for_operator"
+            prompt = "check the first pass"
+            timeout_s = 5.0
+            on_timeout = "continue"
+            "#,
+        )
+        .expect("valid");
+        assert_eq!(f.task.len(), 3);
+        assert!(matches!(
+            f.task[0],
+            TaskSpec::MapRoom { inset_m, path: None, .. } if inset_m == 1.0
+        ));
+        assert_eq!(f.task[1].name(), "follow_wall");
+        assert!(f.task.iter().all(|t| t.invalid().is_none()));
+    }
+
+    #[test]
+    fn unknown_tasks_and_fields_are_refused() {
+        let bad_task = toml::from_str::<File>("[[task]]\ntask = \"fly\"\n");
+        assert!(bad_task.is_err());
+        let bad_field =
+            toml::from_str::<File>("[[task]]\ntask = \"move_relative\"\ndx_m = 1.0\nspeed = 0.3\n");
+        let msg = bad_field.expect_err("unknown field").to_string();
+        assert!(msg.contains("speed"), "{msg}");
+    }
+
+    #[test]
+    fn values_out_of_range_are_named() {
+        let t = TaskSpec::FollowWall {
+            wall: WallName::North,
+            standoff_m: 0.6,
+            from_m: 2.0,
+            to_m: 2.05,
+            speed_mps: 0.25,
+        };
+        assert_eq!(t.invalid().map(|(k, _)| k), Some("to_m"));
+        let t = TaskSpec::MoveRelative {
+            dx_m: 1.0,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+            speed_mps: 2.0,
+        };
+        assert_eq!(t.invalid().map(|(k, _)| k), Some("speed_mps"));
+    }
+}

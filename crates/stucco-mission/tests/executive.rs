@@ -1,0 +1,525 @@
+//! The executive on a kinematic tricycle with a perfect estimate: each task
+//! ends where it should, the mission's states and events follow the
+//! operator, the supervisor stops for what is in the way, and a mission
+//! resumed from its progress never does a finished task again.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use nalgebra::Point2;
+use stucco_control::{GainSchedule, Limiter};
+use stucco_core::{DriveCommand, Pose2, Stamp, Twist2, VehicleSpec, wrap_angle};
+use stucco_mission::*;
+
+const DT: f64 = 0.02;
+const ROOM: [f64; 2] = [5.0, 3.0];
+
+/// The robot: a kinematic tricycle behind the vehicle's limits.
+struct Robot {
+    pose: Pose2,
+    limiter: Limiter,
+    spec: VehicleSpec,
+    now: Stamp,
+    room_sigma: [f64; 2],
+    doors: Vec<DoorEstimate>,
+}
+
+impl Robot {
+    fn at(pose: Pose2) -> Self {
+        let spec = VehicleSpec::default();
+        Robot {
+            pose,
+            limiter: Limiter::new(&spec),
+            spec,
+            now: Stamp::ZERO,
+            room_sigma: [0.001; 2],
+            doors: Vec::new(),
+        }
+    }
+
+    fn estimate(&self) -> Estimate {
+        Estimate {
+            stamp: self.now,
+            pose: self.pose,
+            position_sigma_m: 0.003,
+            heading_sigma_rad: 0.002,
+            room_m: ROOM,
+            room_sigma_m: self.room_sigma,
+            doors: self.doors.clone(),
+        }
+    }
+
+    fn drive(&mut self, cmd: DriveCommand) {
+        let c = self.limiter.limit(cmd, DT);
+        let v = c.speed_mps * c.steer_rad.cos();
+        let w = c.speed_mps * c.steer_rad.sin() / self.spec.wheelbase_m;
+        self.pose = self.pose * Twist2::new(v, 0.0, w).displacement(DT);
+        self.now = self.now.offset_secs(DT);
+    }
+}
+
+fn executive(tasks: Vec<TaskSpec>, unattended: bool) -> Executive {
+    Executive::new(
+        ExecutiveConfig {
+            vehicle: VehicleSpec::default(),
+            gains: GainSchedule::default(),
+            safety: SafetyConfig::default(),
+            unattended,
+        },
+        tasks,
+    )
+}
+
+/// Runs until the mission is over or `seconds` pass; the events, and the
+/// lowest standoff seen while following `watch` (if given).
+fn run(
+    exec: &mut Executive,
+    robot: &mut Robot,
+    seconds: f64,
+    mut operator: impl FnMut(Stamp, &Executive) -> Vec<OperatorCommand>,
+) -> Vec<Event> {
+    let mut events = Vec::new();
+    let steps = (seconds / DT) as usize;
+    for _ in 0..steps {
+        let est = robot.estimate();
+        let ops = operator(robot.now, exec);
+        let out = exec.tick(
+            robot.now,
+            &Inputs {
+                estimate: &est,
+                obstacles: &[],
+                bumper: false,
+                estop: false,
+                operator: &ops,
+            },
+        );
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    events
+}
+
+fn kinds(events: &[Event]) -> Vec<String> {
+    events
+        .iter()
+        .map(|e| {
+            serde_json::to_value(e).unwrap()["event"]
+                .as_str()
+                .unwrap()
+                .to_owned()
+        })
+        .collect()
+}
+
+#[test]
+fn move_relative_ends_at_the_goal_turning_on_the_spot() {
+    let start = Pose2::new(1.5, 1.5, 0.0);
+    let mut robot = Robot::at(start);
+    let mut exec = executive(
+        vec![TaskSpec::MoveRelative {
+            dx_m: 1.0,
+            dy_m: 0.5,
+            dtheta_deg: 90.0,
+            speed_mps: 0.3,
+        }],
+        true,
+    );
+    let events = run(&mut exec, &mut robot, 60.0, |_, _| Vec::new());
+    assert_eq!(exec.mode(), &MissionMode::Done, "{events:?}");
+    let goal = start * Pose2::new(1.0, 0.5, std::f64::consts::FRAC_PI_2);
+    let err = (robot.pose.position() - goal.position()).norm();
+    assert!(err < 0.02, "{err} m off: {:?}", robot.pose);
+    assert!(wrap_angle(robot.pose.theta - goal.theta).abs() < 0.02);
+    let k = kinds(&events);
+    assert_eq!(k.first().map(String::as_str), Some("mission_started"));
+    assert_eq!(k.iter().filter(|e| *e == "behaviour_started").count(), 3);
+    assert_eq!(k.last().map(String::as_str), Some("mission_done"));
+}
+
+#[test]
+fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(
+        vec![TaskSpec::FollowWall {
+            wall: WallName::South,
+            standoff_m: 0.6,
+            from_m: 2.6,
+            to_m: 4.0,
+            speed_mps: 0.25,
+        }],
+        true,
+    );
+    let mut worst = 0.0f64;
+    let mut following = 0;
+    let steps = (120.0 / DT) as usize;
+    for _ in 0..steps {
+        let est = robot.estimate();
+        let out = exec.tick(
+            robot.now,
+            &Inputs {
+                estimate: &est,
+                obstacles: &[],
+                bumper: false,
+                estop: false,
+                operator: &[],
+            },
+        );
+        // The pass proper: from `from_m` on, the standoff holds.
+        if matches!(
+            exec.current_behaviour(),
+            Some(BehaviourKind::FollowWall { .. })
+        ) && robot.pose.x >= 2.6
+        {
+            following += 1;
+            worst = worst.max((robot.pose.y - 0.6).abs());
+        }
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done);
+    assert!(following > 100, "{following} steps along the wall");
+    assert!(worst < 0.01, "standoff off by {worst} m");
+    assert!((robot.pose.x - 4.0).abs() < 0.02, "{:?}", robot.pose);
+}
+
+#[test]
+fn a_pass_too_near_the_corner_is_refused_with_a_reason() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(
+        vec![TaskSpec::FollowWall {
+            wall: WallName::South,
+            standoff_m: 0.6,
+            from_m: 1.0,
+            to_m: 4.0,
+            speed_mps: 0.25,
+        }],
+        true,
+    );
+    run(&mut exec, &mut robot, 1.0, |_, _| Vec::new());
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?}", exec.mode());
+    };
+    assert!(reason.contains("too near the corner"), "{reason}");
+    // And a pass running into the end wall.
+    let mut exec = executive(
+        vec![TaskSpec::FollowWall {
+            wall: WallName::South,
+            standoff_m: 0.6,
+            from_m: 2.6,
+            to_m: 4.6,
+            speed_mps: 0.25,
+        }],
+        true,
+    );
+    run(&mut exec, &mut robot, 1.0, |_, _| Vec::new());
+    assert!(
+        matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("body reaches"))
+    );
+}
+
+fn waiting_tasks() -> Vec<TaskSpec> {
+    vec![
+        TaskSpec::WaitForOperator {
+            prompt: "ready?".to_owned(),
+            timeout_s: None,
+            on_timeout: OnTimeout::Fail,
+        },
+        TaskSpec::MoveRelative {
+            dx_m: 0.5,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+            speed_mps: 0.3,
+        },
+        TaskSpec::WaitForOperator {
+            prompt: "again?".to_owned(),
+            timeout_s: Some(2.0),
+            on_timeout: OnTimeout::Continue,
+        },
+    ]
+}
+
+#[test]
+fn the_operator_pauses_resumes_and_answers() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(waiting_tasks(), false);
+    let mut paused_at = None;
+    let events = run(&mut exec, &mut robot, 60.0, |now, e| {
+        let t = now.as_secs_f64();
+        match (t, e.current_task()) {
+            // The first task waits for its answer.
+            (t, Some((0, _))) if t > 1.0 => vec![OperatorCommand::Continue],
+            // Halfway through the move: pause for 2 s.
+            (t, Some((1, _))) if paused_at.is_none() && t > 2.0 => {
+                paused_at = Some(t);
+                vec![OperatorCommand::Pause]
+            }
+            (t, _) if paused_at.is_some_and(|p| t > p + 2.0 && t < p + 2.03) => {
+                vec![OperatorCommand::Resume]
+            }
+            _ => Vec::new(),
+        }
+    });
+    assert_eq!(exec.mode(), &MissionMode::Done, "{events:?}");
+    // The last wait timed out into `continue`.
+    assert!(exec.status().iter().all(|s| *s == TaskStatus::Done));
+    let k = kinds(&events);
+    for want in [
+        "operator_prompt",
+        "paused",
+        "resumed",
+        "task_done",
+        "mission_done",
+    ] {
+        assert!(k.iter().any(|e| e == want), "no {want} in {k:?}");
+    }
+    assert!((robot.pose.x - 2.0).abs() < 0.02);
+}
+
+#[test]
+fn skip_and_abort_leave_the_progress_as_they_say() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(waiting_tasks(), false);
+    let mut sent = 0;
+    run(&mut exec, &mut robot, 10.0, |_, e| match e.current_task() {
+        Some((0, _)) if sent == 0 => {
+            sent += 1;
+            vec![OperatorCommand::Skip]
+        }
+        Some((1, _)) if sent == 1 => {
+            sent += 1;
+            vec![OperatorCommand::Abort]
+        }
+        _ => Vec::new(),
+    });
+    assert_eq!(exec.mode(), &MissionMode::Aborted);
+    assert_eq!(
+        exec.status(),
+        [
+            TaskStatus::Skipped,
+            TaskStatus::Pending,
+            TaskStatus::Pending
+        ]
+    );
+}
+
+#[test]
+fn a_resumed_mission_never_does_a_finished_task_again() {
+    let tasks = vec![
+        TaskSpec::MoveRelative {
+            dx_m: 0.5,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+            speed_mps: 0.3,
+        },
+        TaskSpec::MoveRelative {
+            dx_m: 0.5,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+            speed_mps: 0.3,
+        },
+    ];
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(tasks.clone(), true);
+    // Stopped (aborted) while the second task is under way.
+    let mut saved = None;
+    run(&mut exec, &mut robot, 60.0, |_, e| {
+        if saved.is_none() && e.current_task().map(|t| t.0) == Some(1) {
+            saved = Some(e.progress());
+            vec![OperatorCommand::Abort]
+        } else {
+            Vec::new()
+        }
+    });
+    let saved = saved.expect("the second task started");
+    // The progress goes through JSON, as a checkpoint file keeps it.
+    let text = serde_json::to_string(&saved).unwrap();
+    let back: Progress = serde_json::from_str(&text).unwrap();
+    let mut again = executive(tasks.clone(), true);
+    again.resume_from(&back).expect("same mission");
+    let x0 = robot.pose.x;
+    let events = run(&mut again, &mut robot, 60.0, |_, _| Vec::new());
+    assert_eq!(again.mode(), &MissionMode::Done);
+    let started: Vec<_> = events
+        .iter()
+        .filter_map(|e| match &e.kind {
+            EventKind::TaskStarted { task, .. } => Some(*task),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(started, [1]);
+    assert!((robot.pose.x - x0 - 0.5).abs() < 0.02);
+    // Another mission's progress is refused.
+    let mut other = executive(tasks[..1].to_vec(), true);
+    let err = other.resume_from(&back).expect_err("mismatch");
+    assert!(err.to_string().contains("checkpoint holds"), "{err}");
+}
+
+#[test]
+fn an_obstacle_stops_the_robot_and_a_lasting_one_fails_the_task() {
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(
+        vec![TaskSpec::MoveRelative {
+            dx_m: 2.0,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+            speed_mps: 0.3,
+        }],
+        true,
+    );
+    // A person standing 1.5 m ahead of the start, in the robot's frame as
+    // it moves.
+    let person = Point2::new(2.5 + 0.2, 1.5);
+    let mut stopped_at = None;
+    let mut events = Vec::new();
+    for _ in 0..(60.0 / DT) as usize {
+        let est = robot.estimate();
+        let seen = [robot.pose.inverse().transform_point(&person)];
+        let out = exec.tick(
+            robot.now,
+            &Inputs {
+                estimate: &est,
+                obstacles: &seen,
+                bumper: false,
+                estop: false,
+                operator: &[],
+            },
+        );
+        if exec.hazard() == Some(Hazard::Obstacle) && stopped_at.is_none() {
+            stopped_at = Some(robot.pose.x);
+        }
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    let x = stopped_at.expect("stopped for the person");
+    // The field reached past the body's front (0.75 m) when it stopped.
+    assert!(person.x - x > 0.75 && person.x - x < 1.2, "stopped at {x}");
+    assert!(
+        robot.pose.x < person.x - 0.75 - 0.2,
+        "drove into it: {:?}",
+        robot.pose
+    );
+    assert!(matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("blocked")));
+    assert!(kinds(&events).iter().any(|k| k == "safety_stop"));
+}
+
+#[test]
+fn the_estop_stops_at_once_and_waits_for_release_and_resume() {
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(
+        vec![TaskSpec::MoveRelative {
+            dx_m: 2.0,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+            speed_mps: 0.3,
+        }],
+        false,
+    );
+    let mut pressed = false;
+    for k in 0..(60.0 / DT) as usize {
+        let est = robot.estimate();
+        let estop = (100..200).contains(&k);
+        let ops = if k == 250 {
+            vec![OperatorCommand::Resume]
+        } else {
+            Vec::new()
+        };
+        let out = exec.tick(
+            robot.now,
+            &Inputs {
+                estimate: &est,
+                obstacles: &[],
+                bumper: false,
+                estop,
+                operator: &ops,
+            },
+        );
+        if estop {
+            pressed = true;
+            assert_eq!(out.drive, DriveCommand::STOP);
+            assert_eq!(exec.mode(), &MissionMode::EStopped);
+        }
+        if (200..250).contains(&k) {
+            // Released but not resumed: still standing.
+            assert_eq!(out.drive, DriveCommand::STOP);
+        }
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert!(pressed);
+    assert_eq!(exec.mode(), &MissionMode::Done);
+    // Unattended, the e-stop ends the mission.
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(waiting_tasks(), true);
+    let est = robot.estimate();
+    let out = exec.tick(
+        robot.now,
+        &Inputs {
+            estimate: &est,
+            obstacles: &[],
+            bumper: false,
+            estop: true,
+            operator: &[],
+        },
+    );
+    robot.drive(out.drive);
+    assert!(matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("e-stop")));
+    assert!(out.checkpoint_due);
+}
+
+#[test]
+fn map_room_drives_loops_until_the_room_is_known() {
+    let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
+    robot.room_sigma = [0.05; 2];
+    let mut exec = executive(
+        vec![TaskSpec::MapRoom {
+            path: None,
+            inset_m: 1.0,
+            speed_mps: 0.4,
+            max_size_sigma_m: 0.005,
+            timeout_s: 120.0,
+        }],
+        true,
+    );
+    let mut loops_seen = 0;
+    for _ in 0..(120.0 / DT) as usize {
+        // The size is learnt over the first 30 s (a stand-in for the
+        // filter, which the simulator tests exercise).
+        let t = robot.now.as_secs_f64();
+        robot.room_sigma = [if t > 30.0 { 0.002 } else { 0.05 }; 2];
+        let est = robot.estimate();
+        let out = exec.tick(
+            robot.now,
+            &Inputs {
+                estimate: &est,
+                obstacles: &[],
+                bumper: false,
+                estop: false,
+                operator: &[],
+            },
+        );
+        loops_seen += out
+            .events
+            .iter()
+            .filter(|e| {
+                matches!(&e.kind, EventKind::BehaviourStarted { behaviour, .. } if behaviour == "path")
+            })
+            .count();
+        robot.drive(out.drive);
+        // It stays inside the room, clear of the walls.
+        let p = robot.pose;
+        assert!(p.x > 0.8 && p.x < 4.2 && p.y > 0.8 && p.y < 2.2, "{p:?}");
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done);
+    assert!(loops_seen >= 2, "{loops_seen} loops");
+}
