@@ -3,6 +3,7 @@
 
 mod corridor;
 mod door_passage;
+mod missions;
 mod walls_on_real_logs;
 
 /// `stucco run` on `missions/<name>.toml`, with the mission's own seed and

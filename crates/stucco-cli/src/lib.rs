@@ -6,6 +6,9 @@
 //! - [`run_simbench`]: the `stucco simbench` job.
 //! - [`run_mission`]: the `stucco run` job for experiment missions
 //!   ([`Mission`]), closing the loop through [`Navigator`].
+//! - [`run_task_mission`]: the `stucco run` job for task missions: the
+//!   executive of `stucco-mission` in the simulator, with report, events,
+//!   map and checkpoints.
 #![warn(missing_docs)]
 
 mod carmen;
@@ -13,13 +16,18 @@ mod experiments;
 mod mission;
 mod navigator;
 mod simbench;
+mod task_mission;
 mod walls;
 
 pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
-pub use mission::{Corridor, DoorPassage, Mission, RoomSize, Start};
+pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
+pub use task_mission::{
+    Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,
+    run_task_mission, write_atomic,
+};
 pub use walls::{
     ExtractorKind, MIN_REOBSERVATIONS, WallsJob, WallsReport, make_extractor, run_walls,
 };

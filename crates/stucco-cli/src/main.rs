@@ -7,7 +7,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use stucco_cli::{
-    ExtractorKind, RunJob, SimbenchJob, WallsJob, run_mission, run_simbench, run_walls,
+    BadInput, ExtractorKind, Mission, MissionReport, MissionSummary, RunJob, SimbenchJob,
+    TaskMissionJob, WallsJob, run_mission, run_simbench, run_task_mission, run_walls,
 };
 
 /// stucco: software of an autonomous spray-plastering robot.
@@ -37,17 +38,30 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Run a mission in the simulator (today: the navigation experiments of
-    /// `missions/`), seeds in parallel, and report against the truth.
+    /// Run a mission in the simulator — its tasks carried out by the
+    /// executive, or one of the navigation experiments — seeds in
+    /// parallel, and report against the truth. Exit code: 0 mission done,
+    /// 1 mission failed, 2 bad input.
     Run {
         /// The mission file (`missions/*.toml`).
         mission: PathBuf,
         /// Seed of the first run, instead of the mission's.
         #[arg(long)]
         seed: Option<u64>,
-        /// Runs per condition, instead of the mission's.
+        /// Runs (per condition, for experiments), instead of the mission's.
         #[arg(long)]
         runs: Option<u64>,
+        /// Write report.json, events.jsonl, map.svg and checkpoint.json here
+        /// (task missions; one folder per seed with --runs).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Go on from DIR/checkpoint.json, never redoing a finished task.
+        #[arg(long)]
+        resume: bool,
+        /// Stop after this many simulated seconds, as if switched off (a
+        /// task mission's checkpoint keeps what was finished).
+        #[arg(long)]
+        stop_after: Option<f64>,
         /// Print the report as one JSON object on stdout.
         #[arg(long)]
         json: bool,
@@ -83,6 +97,159 @@ fn print_json(value: &impl serde::Serialize) -> ExitCode {
     }
 }
 
+/// Reports `e`; exit code 2 for bad input, 1 for the rest.
+fn fail(e: &anyhow::Error) -> ExitCode {
+    eprintln!("error: {e:#}");
+    if e.downcast_ref::<BadInput>().is_some() {
+        ExitCode::from(2)
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+/// `stucco run` on a task mission.
+fn run_tasks(job: TaskMissionJob, json: bool) -> ExitCode {
+    let bar = ProgressBar::new_spinner().with_style(
+        ProgressStyle::with_template("{spinner} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    let hear = |sim_s: f64, task: &str| {
+        bar.set_message(format!("{sim_s:7.1} s simulated · {task}"));
+        bar.tick();
+    };
+    let result = run_task_mission(&job, &hear);
+    bar.finish_and_clear();
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => return fail(&e),
+    };
+    if json {
+        if summary.runs.len() == 1 {
+            print_json(&summary.runs[0]);
+        } else {
+            print_json(&summary);
+        }
+    } else {
+        print_summary(&summary);
+    }
+    if summary.outcome == "done" {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+fn print_run(r: &MissionReport) {
+    println!(
+        "{} (seed {}): {}{} — {:.1} s simulated in {:.2} s ({:.0}× real time)",
+        r.mission,
+        r.seed,
+        r.outcome,
+        r.reason
+            .as_ref()
+            .map(|w| format!(": {w}"))
+            .unwrap_or_default(),
+        r.sim_seconds,
+        r.wall_seconds,
+        r.real_time_factor
+    );
+    for (i, t) in r.tasks.iter().enumerate() {
+        let secs = t.seconds.map(|s| format!("{s:6.1} s")).unwrap_or_default();
+        println!(
+            "  {i:>2} {:<18} {:<8} {secs}",
+            t.name,
+            status_name(&t.status)
+        );
+    }
+    println!(
+        "  room {:.3} × {:.3} m (true {:.3} × {:.3}, σ {:.1}/{:.1} mm); position RMS {:.1} mm (max {:.1}), heading RMS {:.2}°; {:.1} m driven, {} safety stops",
+        r.room_m[0],
+        r.room_m[1],
+        r.room_true_m[0],
+        r.room_true_m[1],
+        r.room_sigma_m[0] * 1e3,
+        r.room_sigma_m[1] * 1e3,
+        r.pose_rms_m * 1e3,
+        r.pose_max_m * 1e3,
+        r.heading_rms_rad.to_degrees(),
+        r.path_length_m,
+        r.safety_stops
+    );
+    for d in &r.doors {
+        println!(
+            "  door in the {:?} wall at {:.3} m{}: {:.1} cm from the true door",
+            d.wall,
+            d.position_m,
+            d.width_m
+                .map(|w| format!(", {w:.2} m wide"))
+                .unwrap_or_default(),
+            d.error_m * 1e2
+        );
+    }
+}
+
+fn status_name(s: &stucco_mission::TaskStatus) -> String {
+    match s {
+        stucco_mission::TaskStatus::Failed { reason } => format!("failed: {reason}"),
+        other => serde_json::to_value(other)
+            .ok()
+            .and_then(|v| v["state"].as_str().map(str::to_owned))
+            .unwrap_or_default(),
+    }
+}
+
+fn print_summary(s: &MissionSummary) {
+    for r in &s.runs {
+        print_run(r);
+    }
+    if s.runs.len() > 1 {
+        println!(
+            "{}: {}/{} runs done, {:.0} s simulated in {:.1} s ({:.0}× real time)",
+            s.mission,
+            s.done,
+            s.runs.len(),
+            s.sim_seconds,
+            s.wall_seconds,
+            s.real_time_factor
+        );
+    }
+}
+
+/// `stucco run` on an experiment mission.
+fn run_experiment(job: RunJob, json: bool) -> ExitCode {
+    match run_mission(&job) {
+        Ok(report) if json => print_json(&report),
+        Ok(r) => {
+            println!("{}: {} runs from seed {}", r.mission, r.runs, r.seed);
+            for c in &r.conditions {
+                println!(
+                    "  {:>18}: lateral σ {:.1} mm (mean {:+.1}), heading σ {:.2} mrad (mean {:+.2})",
+                    c.name,
+                    c.lateral_std_m * 1e3,
+                    c.lateral_mean_m * 1e3,
+                    c.heading_std_rad * 1e3,
+                    c.heading_mean_rad * 1e3
+                );
+                if let Some(e) = c.door_estimate_rms_m {
+                    println!("  {:>18}  door estimate RMS {:.1} mm", "", e * 1e3);
+                }
+            }
+            if let (Some(sd), Some(m)) = (r.room_size_std_m, r.room_size_mean_m) {
+                println!(
+                    "  room {:.4} × {:.4} m, σ {:.1} mm; position RMS {:.1} mm, heading RMS {:.3}°",
+                    m[0],
+                    m[1],
+                    sd * 1e3,
+                    r.pose_rms_m.unwrap_or(f64::NAN) * 1e3,
+                    r.heading_rms_rad.unwrap_or(f64::NAN).to_degrees()
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail(&e),
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
@@ -90,45 +257,38 @@ fn main() -> ExitCode {
             mission,
             seed,
             runs,
+            out,
+            resume,
+            stop_after,
             json,
-        } => match run_mission(&RunJob {
-            mission,
-            seed,
-            runs,
-        }) {
-            Ok(report) if json => print_json(&report),
-            Ok(r) => {
-                println!("{}: {} runs from seed {}", r.mission, r.runs, r.seed);
-                for c in &r.conditions {
-                    println!(
-                        "  {:>18}: lateral σ {:.1} mm (mean {:+.1}), heading σ {:.2} mrad (mean {:+.2})",
-                        c.name,
-                        c.lateral_std_m * 1e3,
-                        c.lateral_mean_m * 1e3,
-                        c.heading_std_rad * 1e3,
-                        c.heading_mean_rad * 1e3
-                    );
-                    if let Some(e) = c.door_estimate_rms_m {
-                        println!("  {:>18}  door estimate RMS {:.1} mm", "", e * 1e3);
-                    }
-                }
-                if let (Some(sd), Some(m)) = (r.room_size_std_m, r.room_size_mean_m) {
-                    println!(
-                        "  room {:.4} × {:.4} m, σ {:.1} mm; position RMS {:.1} mm, heading RMS {:.3}°",
-                        m[0],
-                        m[1],
-                        sd * 1e3,
-                        r.pose_rms_m.unwrap_or(f64::NAN) * 1e3,
-                        r.heading_rms_rad.unwrap_or(f64::NAN).to_degrees()
-                    );
-                }
-                ExitCode::SUCCESS
+        } => {
+            let tasks = match Mission::load(&mission) {
+                Ok(m) => !m.tasks.is_empty(),
+                Err(e) => return fail(&e),
+            };
+            if tasks {
+                run_tasks(
+                    TaskMissionJob {
+                        mission,
+                        seed,
+                        runs,
+                        out,
+                        resume,
+                        stop_after_s: stop_after,
+                    },
+                    json,
+                )
+            } else {
+                run_experiment(
+                    RunJob {
+                        mission,
+                        seed,
+                        runs,
+                    },
+                    json,
+                )
             }
-            Err(e) => {
-                eprintln!("error: {e:#}");
-                ExitCode::FAILURE
-            }
-        },
+        }
         Command::Simbench {
             world,
             seed,

@@ -1,10 +1,25 @@
-//! Experiment missions (`missions/*.toml`): a world, seeds and one of the
-//! navigation experiments of paper A, run by `stucco run`. Every table is
-//! `deny_unknown_fields`; errors name the file, line and column.
+//! Mission files (`missions/*.toml`): a world, seeds, and either a list of
+//! tasks for the executive (`[[task]]`, with `[start]` and `[failsafe]`) or
+//! one of the navigation experiments of paper A, run by `stucco run`. Every
+//! table is `deny_unknown_fields`; errors name the file, line and column.
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use stucco_mission::{SafetyConfig, TaskSpec};
+
+/// Input that cannot be used as it is (a mission file, a checkpoint):
+/// `stucco run` exits with 2 on it.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct BadInput(pub String);
+
+/// Fails with [`BadInput`].
+macro_rules! bad {
+    ($($arg:tt)*) => {
+        return Err(BadInput(format!($($arg)*)).into())
+    };
+}
 
 /// A mission file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -25,6 +40,48 @@ pub struct Mission {
     pub corridor: Option<Corridor>,
     /// The room's size learnt while touring it.
     pub room_size: Option<RoomSize>,
+    /// What the robot knows when a task mission starts.
+    pub start: Option<StartKnowledge>,
+    /// The safety supervisor's settings.
+    #[serde(default)]
+    pub failsafe: SafetyConfig,
+    /// The tasks, in order (`[[task]]`).
+    #[serde(default, rename = "task")]
+    pub tasks: Vec<TaskSpec>,
+    /// A task mission fails when it takes longer than this, simulated s.
+    #[serde(default = "time_limit")]
+    pub time_limit_s: f64,
+    /// Whether the world's people walk about during a task mission (false:
+    /// the site is closed while the robot works).
+    #[serde(default = "yes")]
+    pub people: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn time_limit() -> f64 {
+    1800.0
+}
+
+/// What the robot knows of its start in a task mission: it stands at the
+/// world's start pose, in the room frame (the room's south-west corner),
+/// within `pose_sigma_m`; the room's size is known to `room_sigma_m`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartKnowledge {
+    /// The room's size as a plan gives it, m.
+    pub room_m: [f64; 2],
+    /// How far off that may be, m (σ).
+    pub room_sigma_m: f64,
+    /// How far off the start position may be, m (σ).
+    #[serde(default = "start_sigma")]
+    pub pose_sigma_m: f64,
+}
+
+fn start_sigma() -> f64 {
+    0.02
 }
 
 fn one() -> u64 {
@@ -97,36 +154,58 @@ impl Mission {
     /// Reads and checks the mission file at `path`.
     pub fn load(path: &Path) -> Result<Mission> {
         let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
+            .map_err(|e| BadInput(format!("cannot read {}: {e}", path.display())))?;
         let mission: Mission = toml::from_str(&text).map_err(|e| {
             let (line, column) = e
                 .span()
                 .map(|s| stucco_core::line_column(&text, s.start))
                 .unwrap_or((0, 0));
-            anyhow::anyhow!("{}:{line}:{column}: {}", path.display(), e.message())
+            BadInput(format!(
+                "{}:{line}:{column}: {}",
+                path.display(),
+                e.message()
+            ))
         })?;
         let kinds = usize::from(mission.door_passage.is_some())
             + usize::from(mission.corridor.is_some())
-            + usize::from(mission.room_size.is_some());
+            + usize::from(mission.room_size.is_some())
+            + usize::from(!mission.tasks.is_empty());
         if kinds != 1 {
-            bail!(
-                "{}: a mission holds exactly one of [door_passage], [corridor], [room_size]",
+            bad!(
+                "{}: a mission holds exactly one of [[task]], [door_passage], [corridor], [room_size]",
                 path.display()
             );
         }
         if mission.runs == 0 {
-            bail!(
+            bad!(
                 "{}:{}: runs: at least one",
                 path.display(),
                 line_of(&text, "", "runs")
             );
         }
+        if !mission.tasks.is_empty() && mission.start.is_none() {
+            bad!(
+                "{}: a task mission needs [start] (the room's size as planned and how sure it is)",
+                path.display()
+            );
+        }
         if let Some((table, key, why)) = mission.invalid() {
-            bail!(
+            bad!(
                 "{}:{}: [{table}] {key}: {why}",
                 path.display(),
                 line_of(&text, table, key)
             );
+        }
+        for (i, task) in mission.tasks.iter().enumerate() {
+            if let Some((key, why)) = task.invalid() {
+                bad!(
+                    "{}:{}: task {} ({}): {key}: {why}",
+                    path.display(),
+                    line_of_task(&text, i, key),
+                    i + 1,
+                    task.name()
+                );
+            }
         }
         Ok(mission)
     }
@@ -162,6 +241,24 @@ impl Mission {
                 return Some((t, "score_x_m", "the stretch must run forward"));
             }
         }
+        if let Some(s) = &self.start {
+            let t = "start";
+            if !size(&s.room_m) {
+                return Some((t, "room_m", "sides must be positive"));
+            }
+            if !(s.room_sigma_m.is_finite() && s.room_sigma_m >= 0.0) {
+                return Some((t, "room_sigma_m", "must not be negative"));
+            }
+            if !(s.pose_sigma_m.is_finite() && s.pose_sigma_m > 0.0) {
+                return Some((t, "pose_sigma_m", "must be positive"));
+            }
+        }
+        if let Some((key, why)) = self.failsafe.invalid() {
+            return Some(("failsafe", key, why));
+        }
+        if !positive(self.time_limit_s) {
+            return Some(("", "time_limit_s", "must be positive"));
+        }
         if let Some(r) = &self.room_size {
             let t = "room_size";
             if !size(&r.room_m) {
@@ -186,6 +283,30 @@ impl Mission {
             .parent()
             .map_or_else(|| self.world.clone(), |d| d.join(&self.world))
     }
+}
+
+/// The line of `key` in the `n`-th `[[task]]` table, or of its header.
+fn line_of_task(text: &str, n: usize, key: &str) -> usize {
+    let mut seen = 0;
+    let mut header = 0;
+    let mut inside = false;
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.starts_with('[') {
+            inside = line == "[[task]]" && {
+                seen += 1;
+                seen == n + 1
+            };
+            if inside {
+                header = i + 1;
+            }
+            continue;
+        }
+        if inside && line.split_once('=').is_some_and(|(k, _)| k.trim() == key) {
+            return i + 1;
+        }
+    }
+    header
 }
 
 /// The line of `key` in `table` (`""`: the top level; its sub-tables count

@@ -3,14 +3,15 @@
 //! law's command goes through the vehicle's limits, the truth stays aside
 //! (read only to score).
 
-use nalgebra::{DVector, SVector};
+use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_control::Limiter;
 use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp};
+use stucco_mission::{DoorEstimate, Estimate, WallGeometry, WallName};
 use stucco_nav::{
-    DoorConfig, OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig, RoomSearch,
-    RoomState, ScanPoints, Wall, find_doors_moving, sensor_twist, twist_at,
+    DoorConfig, DoorOpening, OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig,
+    RoomSearch, RoomState, ScanPoints, Wall, find_doors_moving, sensor_twist, twist_at,
 };
-use stucco_sim::{SimConfig, Simulator, WorldSpec};
+use stucco_sim::{Layout, SimConfig, Simulator, WorldSpec};
 
 /// Control period, s.
 pub const DT_S: f64 = 0.02;
@@ -25,6 +26,29 @@ pub struct Navigator {
     mount: Pose2,
     samples: Vec<EncoderSample>,
     doors: DoorConfig,
+    /// The last scan's echoes in the robot's frame.
+    obstacles: Vec<Point2<f64>>,
+    /// Openings seen where the filter knows no door, not yet trusted.
+    door_candidates: Vec<DoorCandidate>,
+    /// The width of each door in the filter, m, when measured.
+    door_widths: Vec<Option<f64>>,
+    /// Whether openings seen often enough become doors of the filter.
+    discover_doors: bool,
+    /// Scans each room wall has been used in.
+    walls_seen: [usize; 4],
+}
+
+/// Sightings needed before an opening becomes a door of the map.
+const DOOR_SIGHTINGS: usize = 5;
+
+/// An opening seen in a wall of the room where no door is known yet.
+#[derive(Clone, Debug)]
+struct DoorCandidate {
+    wall: usize,
+    /// Mean position along the wall, m.
+    position_m: f64,
+    width_m: f64,
+    sightings: usize,
 }
 
 impl Navigator {
@@ -62,7 +86,64 @@ impl Navigator {
             mount: vehicle.laser_mount,
             samples: Vec::new(),
             doors: DoorConfig::for_laser(&cfg_laser),
+            obstacles: Vec::new(),
+            door_candidates: Vec::new(),
+            door_widths: Vec::new(),
+            discover_doors: false,
+            walls_seen: [0; 4],
         })
+    }
+
+    /// Lets openings seen in the same place of a wall, scan after scan,
+    /// become doors of the filter (mapping a room).
+    pub fn discover_doors(&mut self, on: bool) {
+        self.discover_doors = on;
+    }
+
+    /// The simulator's time.
+    pub fn now(&self) -> Stamp {
+        self.sim.now()
+    }
+
+    /// The world's static layout (for scoring and drawing).
+    pub fn layout(&self) -> &Layout {
+        self.sim.layout()
+    }
+
+    /// The last scan's echoes in the robot's frame.
+    pub fn obstacles(&self) -> &[Point2<f64>] {
+        &self.obstacles
+    }
+
+    /// The estimate as the executive reads it.
+    pub fn mission_estimate(&self) -> Estimate {
+        let (x, p) = self.ekf.now();
+        let xy = Matrix2::new(p[(0, 0)], p[(0, 1)], p[(1, 0)], p[(1, 1)]);
+        let worst = xy.symmetric_eigenvalues().max().max(0.0);
+        let doors = self
+            .ekf
+            .doors()
+            .iter()
+            .zip(&self.door_widths)
+            .filter_map(|(d, &width_m)| {
+                Some(DoorEstimate {
+                    wall: WallName::from_index(d.wall)?,
+                    position_m: x[d.index],
+                    width_m,
+                    sigma_m: p[(d.index, d.index)].max(0.0).sqrt(),
+                })
+            })
+            .collect();
+        Estimate {
+            stamp: self.sim.now(),
+            pose: Pose2::new(x[0], x[1], x[2]),
+            position_sigma_m: worst.sqrt(),
+            heading_sigma_rad: p[(2, 2)].max(0.0).sqrt(),
+            room_m: [x[3], x[4]],
+            room_sigma_m: [p[(3, 3)].max(0.0).sqrt(), p[(4, 4)].max(0.0).sqrt()],
+            walls_seen: self.walls_seen,
+            doors,
+        }
     }
 
     /// The filter's estimate now.
@@ -72,6 +153,18 @@ impl Navigator {
 
     /// Puts a door into the filter's state (see [`RoomEkf::add_door`]).
     pub fn add_door(&mut self, wall: usize, position_m: f64, sigma_m: f64) -> usize {
+        self.add_known_door(wall, position_m, None, sigma_m)
+    }
+
+    /// Puts a door `width_m` wide (if known) into the filter's state.
+    pub fn add_known_door(
+        &mut self,
+        wall: usize,
+        position_m: f64,
+        width_m: Option<f64>,
+        sigma_m: f64,
+    ) -> usize {
+        self.door_widths.push(width_m);
         self.ekf.add_door(wall, position_m, sigma_m).index
     }
 
@@ -84,13 +177,17 @@ impl Navigator {
     /// returns the true pose after it, or `None` when the robot touched
     /// something (an experiment's lane must be clear).
     pub fn step(&mut self, speed_mps: f64, steer_rad: f64) -> Option<Pose2> {
-        let cmd = self.limiter.limit(
-            DriveCommand {
-                speed_mps,
-                steer_rad,
-            },
-            DT_S,
-        );
+        let bumped = self.drive(DriveCommand {
+            speed_mps,
+            steer_rad,
+        });
+        (!bumped).then(|| self.truth())
+    }
+
+    /// One control period with `cmd` (through the vehicle's limits);
+    /// true when a bumper touched something.
+    pub fn drive(&mut self, cmd: DriveCommand) -> bool {
+        let cmd = self.limiter.limit(cmd, DT_S);
         self.sim.command(cmd);
         let r = self.sim.advance(DT_S);
         for e in &r.encoders {
@@ -109,9 +206,86 @@ impl Navigator {
                 .map(|room| room.walls.into_iter().flatten().collect())
                 .unwrap_or_default();
             let doors = find_doors_moving(scan, &twist, &walls, &self.doors);
-            self.ekf.scan(scan.stamp, &walls, &doors);
+            let update = self.ekf.scan(scan.stamp, &walls, &doors);
+            for (q, seen) in self.walls_seen.iter_mut().enumerate() {
+                *seen += usize::from(update.used.contains(&q));
+            }
+            if self.discover_doors {
+                let matched = update.doors_used.len();
+                if matched < doors.len() {
+                    self.note_openings(&doors);
+                }
+            }
+            self.obstacles.clear();
+            self.obstacles.extend(
+                pts.points()
+                    .iter()
+                    .map(|q| self.mount.transform_point(&q.p)),
+            );
         }
-        let t = self.sim.truth();
-        (!t.bumper).then_some(t.drive.pose)
+        // The samples before the last scan are spent.
+        if let Some(last) = r.scans.last() {
+            let keep = self.samples.iter().rposition(|s| s.stamp <= last.stamp);
+            if let Some(k) = keep {
+                self.samples.drain(..k);
+            }
+        }
+        r.bumper || self.sim.truth().bumper
+    }
+
+    /// Counts the openings seen where the filter knows no door; one seen
+    /// `DOOR_SIGHTINGS` times in the same place of a wall becomes a door.
+    fn note_openings(&mut self, openings: &[DoorOpening]) {
+        let est = self.mission_estimate();
+        let laser = est.pose * self.mount;
+        for o in openings {
+            let c = laser.transform_point(&o.center).coords;
+            // The wall it lies in, within 15 cm.
+            let Some((wall, g)) = WallName::ALL
+                .iter()
+                .map(|&w| (w, WallGeometry::of(w, est.room_m)))
+                .find(|(_, g)| g.distance(&c).abs() < 0.15)
+            else {
+                continue;
+            };
+            let at = g.position(&c);
+            if !(0.0..=g.length_m).contains(&at) {
+                continue;
+            }
+            let q = wall.index();
+            let known = est
+                .doors
+                .iter()
+                .any(|d| d.wall == wall && (d.position_m - at).abs() < 0.4);
+            if known {
+                continue;
+            }
+            match self
+                .door_candidates
+                .iter_mut()
+                .find(|d| d.wall == q && (d.position_m - at).abs() < 0.3)
+            {
+                Some(d) => {
+                    let n = d.sightings as f64;
+                    d.position_m = (d.position_m * n + at) / (n + 1.0);
+                    d.width_m = (d.width_m * n + o.width_m) / (n + 1.0);
+                    d.sightings += 1;
+                }
+                None => self.door_candidates.push(DoorCandidate {
+                    wall: q,
+                    position_m: at,
+                    width_m: o.width_m,
+                    sightings: 1,
+                }),
+            }
+        }
+        let (ready, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut self.door_candidates)
+            .into_iter()
+            .partition(|d| d.sightings >= DOOR_SIGHTINGS);
+        self.door_candidates = rest;
+        for d in ready {
+            self.ekf.add_door(d.wall, d.position_m, 0.05);
+            self.door_widths.push(Some(d.width_m));
+        }
     }
 }

@@ -5,7 +5,7 @@
 use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
 use crate::model::{Estimate, WallGeometry, pose_at_wall};
 use crate::supervisor::{Hazard, LostPolicy, SafetyConfig, Supervisor};
-use crate::task::{OnTimeout, TaskSpec};
+use crate::task::{OnTimeout, TaskSpec, WallName};
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -637,16 +637,16 @@ impl Executive {
                 speed_mps,
                 ..
             } => {
-                let loop_ = survey_loop(path.as_deref(), *inset_m, est.room_m)?;
-                let first = loop_[0];
-                let towards = (loop_[1][1] - first[1]).atan2(loop_[1][0] - first[0]);
+                let loop_ = closed(&survey_loop(path.as_deref(), *inset_m, est.room_m)?);
+                let (a, b) = (loop_[0], loop_[1]);
+                let towards = (b[1] - a[1]).atan2(b[0] - a[0]);
                 queue.extend(go_to(
                     gains,
                     &pose,
-                    &Pose2::new(first[0], first[1], towards),
+                    &Pose2::new(a[0], a[1], towards),
                     *speed_mps,
                 ));
-                queue.push_back(Behaviour::path(gains, closed(&loop_), *speed_mps));
+                queue.push_back(Behaviour::path(gains, loop_, *speed_mps));
             }
             TaskSpec::Localize { .. } | TaskSpec::WaitForOperator { .. } => {
                 queue.push_back(Behaviour::hold());
@@ -763,10 +763,11 @@ impl Executive {
         })
     }
 
-    /// Radius the body sweeps turning on the spot, with a margin, m.
+    /// Radius the body sweeps turning on the spot, with a margin for what
+    /// stands out of a wall (a radiator, a sill), m.
     fn pivot_clearance(&self) -> f64 {
         let v = &self.config.vehicle;
-        (v.length_m - v.rear_overhang_m).hypot(0.5 * v.width_m) + 0.1
+        (v.length_m - v.rear_overhang_m).hypot(0.5 * v.width_m) + 0.2
     }
 
     /// The way onto a pose beside `wall`: to a point `RUN_IN_M` before it,
@@ -830,31 +831,50 @@ impl Executive {
                 timeout_s,
                 max_size_sigma_m,
                 path,
+                walls,
+                min_sightings,
                 inset_m,
                 speed_mps,
             } => {
+                let unseen: Vec<WallName> = walls
+                    .iter()
+                    .copied()
+                    .filter(|w| est.walls_seen[w.index()] < *min_sightings)
+                    .collect();
+                // A side of the room is measured when both its walls are.
+                let listed = |a: WallName, b: WallName| walls.contains(&a) && walls.contains(&b);
+                let sides = [
+                    listed(WallName::West, WallName::East),
+                    listed(WallName::South, WallName::North),
+                ];
+                let loose: Vec<f64> = (0..2)
+                    .filter(|&i| sides[i] && est.room_sigma_m[i] > *max_size_sigma_m)
+                    .map(|i| est.room_sigma_m[i])
+                    .collect();
                 if elapsed > *timeout_s {
-                    return TaskStep::Failed(format!(
-                        "map_room: the room's size is known to {:.1} mm after {timeout_s} s",
-                        1e3 * est.room_sigma_m[0].max(est.room_sigma_m[1])
-                    ));
+                    return TaskStep::Failed(if unseen.is_empty() {
+                        format!(
+                            "map_room: the room's size is known to {:.1} mm after {timeout_s} s",
+                            1e3 * loose.iter().fold(0.0f64, |m, &s| m.max(s))
+                        )
+                    } else {
+                        format!("map_room: walls {unseen:?} not seen in {timeout_s} s")
+                    });
                 }
-                let known = est.room_sigma_m.iter().all(|s| s <= max_size_sigma_m);
                 if a.current.is_none() && a.queue.is_empty() {
                     a.loops += 1;
-                    if known {
+                    if unseen.is_empty() && loose.is_empty() {
                         return TaskStep::Done;
                     }
-                    // Another loop, from its first corner turned toward the
-                    // second: each one sees the walls again.
+                    // Another loop, from where the last one ended: each one
+                    // sees the walls again.
                     match survey_loop(path.as_deref(), *inset_m, est.room_m) {
                         Ok(l) => {
+                            let l = closed(&l);
                             let towards = (l[1][1] - l[0][1]).atan2(l[1][0] - l[0][0]);
-                            let corner = Pose2::new(l[0][0], l[0][1], towards);
-                            a.queue
-                                .extend(go_to(&gains, &est.pose, &corner, *speed_mps));
-                            a.queue
-                                .push_back(Behaviour::path(&gains, closed(&l), *speed_mps));
+                            let start = Pose2::new(l[0][0], l[0][1], towards);
+                            a.queue.extend(go_to(&gains, &est.pose, &start, *speed_mps));
+                            a.queue.push_back(Behaviour::path(&gains, l, *speed_mps));
                         }
                         Err(e) => return TaskStep::Failed(e),
                     }
@@ -959,11 +979,17 @@ fn survey_loop(
     ])
 }
 
-/// The loop closed on its first point.
+/// The loop through `points` as a path that starts and ends halfway along
+/// its first side: every corner is turned on the move, and the next loop
+/// goes on from where this one ends, heading its way.
 fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut p = points.to_vec();
-    if let Some(&first) = points.first() {
-        p.push(first);
-    }
+    let (Some(&a), Some(&b)) = (points.first(), points.get(1)) else {
+        return points.to_vec();
+    };
+    let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    let mut p = vec![mid];
+    p.extend_from_slice(&points[1..]);
+    p.push(a);
+    p.push(mid);
     p
 }

@@ -3,18 +3,19 @@
 
 use crate::task::{Side, WallName};
 use nalgebra::Vector2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use stucco_core::{Pose2, Stamp};
 
 /// A door of the room as the robot knows it.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DoorEstimate {
     /// The wall it is in.
     pub wall: WallName,
     /// Its centre along the wall, m.
     pub position_m: f64,
-    /// Its width, m.
-    pub width_m: f64,
+    /// Its width, m, when measured (a door given by a map may not be).
+    pub width_m: Option<f64>,
     /// Standard deviation of its position, m.
     pub sigma_m: f64,
 }
@@ -34,6 +35,8 @@ pub struct Estimate {
     pub room_m: [f64; 2],
     /// Its standard deviation, m.
     pub room_sigma_m: [f64; 2],
+    /// Scans each wall (in [`WallName::index`] order) has been used in.
+    pub walls_seen: [usize; 4],
     /// The doors known.
     pub doors: Vec<DoorEstimate>,
 }

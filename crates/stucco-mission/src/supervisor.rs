@@ -5,7 +5,7 @@
 use crate::model::Estimate;
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
-use stucco_core::{DriveCommand, VehicleSpec};
+use stucco_core::{DriveCommand, Pose2, Twist2, VehicleSpec};
 
 /// What to do when the pose estimate is lost (its σ past the limits).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -157,39 +157,38 @@ impl Supervisor {
     }
 
     /// True when an obstacle point (robot frame, rear axle at the origin)
-    /// lies where `cmd` takes the body within its stopping distance.
+    /// lies in the body's footprint anywhere along the arc `cmd` drives
+    /// within its stopping distance (and the margin): forward, backward,
+    /// on a curve or turning on the spot alike.
     pub fn blocked(&self, cmd: &DriveCommand, obstacles: &[Point2<f64>]) -> bool {
         let v = &self.vehicle;
         let c = &self.config;
-        let front = v.length_m - v.rear_overhang_m;
-        let half = 0.5 * v.width_m + c.lateral_margin_m;
-        if cmd.speed_mps == 0.0 {
+        if cmd.speed_mps == 0.0 || obstacles.is_empty() {
             return false;
         }
-        if cmd.steer_rad.abs() > 1.0 {
-            // Turning on the spot: the front corners sweep a circle.
-            let r = front.hypot(0.5 * v.width_m) + c.lateral_margin_m;
-            return obstacles.iter().any(|p| p.coords.norm() <= r);
-        }
         let s = cmd.speed_mps.abs();
-        let reach = s * s / (2.0 * c.stop_decel_mps2) + c.obstacle_margin_m + 0.1 * s;
-        let (lo, hi) = if cmd.speed_mps > 0.0 {
-            (front, front + reach)
-        } else {
-            (-v.rear_overhang_m - reach, -v.rear_overhang_m)
-        };
-        // The field bends with the steering: check each point against the
-        // body's path, approximated by the chord in the wheel's direction
-        // over the field's length.
-        let turn = cmd.steer_rad.sin() / v.wheelbase_m;
-        obstacles.iter().any(|p| {
-            let ahead = p.x;
-            if ahead < lo || ahead > hi {
-                return false;
-            }
-            // Lateral drift of the path at that distance (arc ≈ ½κx²).
-            let drift = 0.5 * turn * ahead * ahead;
-            (p.y - drift).abs() <= half
+        // Front-wheel travel before a stop, and the margin.
+        let travel = s * s / (2.0 * c.stop_decel_mps2) + c.obstacle_margin_m + 0.1 * s;
+        let sign = cmd.speed_mps.signum();
+        // Per metre of front-wheel travel: the rear axle's advance and the
+        // turn.
+        let (forward, turn) = (
+            sign * cmd.steer_rad.cos(),
+            sign * cmd.steer_rad.sin() / v.wheelbase_m,
+        );
+        let (back, front) = (-v.rear_overhang_m, v.length_m - v.rear_overhang_m);
+        let half = 0.5 * v.width_m + c.lateral_margin_m;
+        // Poses every 5 cm of travel (and every 3° of turn).
+        let steps = ((travel / 0.05).max(travel * turn.abs() / 0.05).ceil() as usize).max(1);
+        let ds = travel / steps as f64;
+        let twist = Twist2::new(forward, 0.0, turn);
+        (1..=steps).any(|k| {
+            let pose = Pose2::default().advanced(&twist, ds * k as f64);
+            let inv = pose.inverse();
+            obstacles.iter().any(|p| {
+                let q = inv.transform_point(p);
+                q.x >= back && q.x <= front && q.y.abs() <= half
+            })
         })
     }
 
@@ -243,6 +242,7 @@ mod tests {
             heading_sigma_rad: 0.001,
             room_m: [5.0, 3.0],
             room_sigma_m: [0.01; 2],
+            walls_seen: [0; 4],
             doors: Vec::new(),
         }
     }
@@ -276,14 +276,29 @@ mod tests {
     }
 
     #[test]
-    fn a_pivot_is_blocked_by_anything_within_the_swept_circle() {
+    fn a_pivot_is_blocked_by_what_its_front_corners_sweep_into() {
         let s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
-        let pivot = DriveCommand {
+        let left = DriveCommand {
             speed_mps: 0.2,
-            steer_rad: 1.57,
+            steer_rad: std::f64::consts::FRAC_PI_2,
         };
-        assert!(s.blocked(&pivot, &[Point2::new(0.0, 0.8)]));
-        assert!(!s.blocked(&pivot, &[Point2::new(0.0, 0.9)]));
+        // Turning left, the front-left corner (0.75, 0.31) swings toward
+        // +y: a post just ahead of it on its circle is hit...
+        let r = 0.75f64.hypot(0.31);
+        let a = 0.31f64.atan2(0.75) + 0.15;
+        assert!(s.blocked(&left, &[Point2::new(r * a.cos(), r * a.sin())]));
+        // ... one just behind it (where the corner comes from) is not, nor
+        // one beyond the circle.
+        let b = -0.31f64.atan2(0.75) - 0.15;
+        assert!(!s.blocked(&left, &[Point2::new(r * b.cos(), r * b.sin())]));
+        assert!(!s.blocked(&left, &[Point2::new(0.0, 0.9)]));
+        // Backing up, what is behind counts.
+        let back = DriveCommand {
+            speed_mps: -0.2,
+            steer_rad: 0.0,
+        };
+        assert!(s.blocked(&back, &[Point2::new(-0.3, 0.0)]));
+        assert!(!s.blocked(&back, &[Point2::new(1.0, 0.0)]));
     }
 
     #[test]

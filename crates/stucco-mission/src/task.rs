@@ -74,6 +74,12 @@ fn survey_speed() -> f64 {
 fn survey_inset() -> f64 {
     1.0
 }
+fn all_walls() -> Vec<WallName> {
+    WallName::ALL.to_vec()
+}
+fn sightings() -> usize {
+    20
+}
 fn size_sigma() -> f64 {
     0.005
 }
@@ -105,14 +111,23 @@ fn beyond() -> f64 {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "task", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TaskSpec {
-    /// Observes every wall of the room while driving a loop inside it,
-    /// until the room's size is known to `max_size_sigma_m`: walls, size,
-    /// and the doors seen on the way.
+    /// Observes the room's walls while driving loops inside it, until each
+    /// of `walls` has been seen in `min_sightings` scans and each side of
+    /// the room whose two walls are both listed is known to
+    /// `max_size_sigma_m`: walls, size, and the doors seen on the way. (A
+    /// wall hidden behind furniture taller than the laser's plane cannot
+    /// be observed: leave it out, and the size across it stays as planned.)
     MapRoom {
         /// The loop, room frame, m; by default a rectangle `inset_m` inside
         /// the walls.
         #[serde(default)]
         path: Option<Vec<[f64; 2]>>,
+        /// The walls to observe.
+        #[serde(default = "all_walls")]
+        walls: Vec<WallName>,
+        /// Scans each must have been used in.
+        #[serde(default = "sightings")]
+        min_sightings: usize,
         /// Distance of the default loop from the walls, m.
         #[serde(default = "survey_inset")]
         inset_m: f64,
@@ -232,11 +247,16 @@ impl TaskSpec {
         match self {
             TaskSpec::MapRoom {
                 path,
+                walls,
                 inset_m,
                 speed_mps,
                 max_size_sigma_m,
                 timeout_s,
+                ..
             } => {
+                if walls.is_empty() {
+                    return Some(("walls", "at least one wall to observe"));
+                }
                 if let Some(p) = path
                     && (p.len() < 3 || !p.iter().flatten().all(|&v| finite(v)))
                 {

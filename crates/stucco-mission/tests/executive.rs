@@ -43,6 +43,7 @@ impl Robot {
             heading_sigma_rad: 0.002,
             room_m: ROOM,
             room_sigma_m: self.room_sigma,
+            walls_seen: [100; 4],
             doors: self.doors.clone(),
         }
     }
@@ -481,6 +482,8 @@ fn map_room_drives_loops_until_the_room_is_known() {
     let mut exec = executive(
         vec![TaskSpec::MapRoom {
             path: None,
+            walls: WallName::ALL.to_vec(),
+            min_sightings: 20,
             inset_m: 1.0,
             speed_mps: 0.4,
             max_size_sigma_m: 0.005,
@@ -490,10 +493,9 @@ fn map_room_drives_loops_until_the_room_is_known() {
     );
     let mut loops_seen = 0;
     for _ in 0..(120.0 / DT) as usize {
-        // The size is learnt over the first 30 s (a stand-in for the
+        // The size is learnt on the second loop (a stand-in for the
         // filter, which the simulator tests exercise).
-        let t = robot.now.as_secs_f64();
-        robot.room_sigma = [if t > 30.0 { 0.002 } else { 0.05 }; 2];
+        robot.room_sigma = [if loops_seen >= 2 { 0.002 } else { 0.05 }; 2];
         let est = robot.estimate();
         let out = exec.tick(
             robot.now,

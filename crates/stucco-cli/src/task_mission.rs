@@ -1,0 +1,744 @@
+//! `stucco run` for task missions: the executive carries out the mission
+//! file's tasks in the simulator, in simulated time as fast as the CPU
+//! allows; the run is scored against the truth and written down — report,
+//! events, a map, and a checkpoint after every finished task so a run
+//! started again with `--resume` goes on where it stopped.
+
+use crate::mission::{BadInput, Mission};
+use crate::navigator::Navigator;
+use anyhow::{Context, Result};
+use nalgebra::{Point2, SVector};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::hash::Hasher;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use stucco_control::GainSchedule;
+use stucco_core::{Pose2, Stamp, wrap_angle};
+use stucco_mission::{
+    DoorEstimate, Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode, Progress,
+    TaskStatus,
+};
+use stucco_sim::{Layout, OpeningKind, SimConfig, WorldSpec};
+
+/// What `stucco run` was asked to do with a task mission.
+#[derive(Clone, Debug)]
+pub struct TaskMissionJob {
+    /// The mission file.
+    pub mission: PathBuf,
+    /// Seed of the first run, instead of the mission's.
+    pub seed: Option<u64>,
+    /// Runs, instead of the mission's.
+    pub runs: Option<u64>,
+    /// Where the report, the events, the map and the checkpoint go.
+    pub out: Option<PathBuf>,
+    /// Go on from the checkpoint in `out`.
+    pub resume: bool,
+    /// Stop after this much simulated time, as if the robot were switched
+    /// off (the checkpoint keeps what was finished).
+    pub stop_after_s: Option<f64>,
+}
+
+/// One task as the run left it.
+#[derive(Clone, Debug, Serialize)]
+pub struct TaskReport {
+    /// Its name.
+    pub name: String,
+    /// How it ended.
+    pub status: TaskStatus,
+    /// Simulated seconds it took in this run (none if it did not run).
+    pub seconds: Option<f64>,
+}
+
+/// A door the robot found, against the nearest true door.
+#[derive(Clone, Debug, Serialize)]
+pub struct DoorReport {
+    /// The wall (`west`, `south`, `east`, `north`).
+    pub wall: stucco_mission::WallName,
+    /// Estimated centre along the wall, m.
+    pub position_m: f64,
+    /// Estimated width, m (none for a door given by the map).
+    pub width_m: Option<f64>,
+    /// Distance from the nearest true door's centre, m.
+    pub error_m: f64,
+}
+
+/// The report of one run (`DIR/report.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct MissionReport {
+    /// `done`, `failed`, `aborted`, or `stopped` (by `--stop-after`).
+    pub outcome: String,
+    /// Why it failed.
+    pub reason: Option<String>,
+    /// The mission's name.
+    pub mission: String,
+    /// The seed.
+    pub seed: u64,
+    /// Simulated seconds.
+    pub sim_seconds: f64,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+    /// Simulated seconds per wall-clock second.
+    pub real_time_factor: f64,
+    /// The tasks.
+    pub tasks: Vec<TaskReport>,
+    /// The first task this run carried out (after a checkpoint).
+    pub first_task: usize,
+    /// RMS of the estimated position's error over the run, m.
+    pub pose_rms_m: f64,
+    /// Largest position error, m.
+    pub pose_max_m: f64,
+    /// RMS of the heading error, rad.
+    pub heading_rms_rad: f64,
+    /// The room's size as estimated at the end, m.
+    pub room_m: [f64; 2],
+    /// Its true size, m.
+    pub room_true_m: [f64; 2],
+    /// Its σ at the end, m.
+    pub room_sigma_m: [f64; 2],
+    /// Scans each wall (west, south, east, north) was used in.
+    pub walls_seen: [usize; 4],
+    /// The doors found or given.
+    pub doors: Vec<DoorReport>,
+    /// Distance driven, m.
+    pub path_length_m: f64,
+    /// Times the supervisor stopped the robot.
+    pub safety_stops: usize,
+    /// Events written.
+    pub events: usize,
+}
+
+/// The report of `--runs N` (`DIR/report.json`): the runs and their sum.
+#[derive(Clone, Debug, Serialize)]
+pub struct MissionSummary {
+    /// `done` when every run was.
+    pub outcome: String,
+    /// The first failing run's reason.
+    pub reason: Option<String>,
+    /// The mission's name.
+    pub mission: String,
+    /// Seed of the first run.
+    pub seed: u64,
+    /// Simulated seconds, all runs.
+    pub sim_seconds: f64,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+    /// Simulated seconds per wall-clock second, all runs together.
+    pub real_time_factor: f64,
+    /// Runs done.
+    pub done: usize,
+    /// Each run.
+    pub runs: Vec<MissionReport>,
+}
+
+/// What a checkpoint file holds.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Checkpoint {
+    /// The mission's name.
+    pub mission: String,
+    /// Digest of the mission file's text: a checkpoint of another version
+    /// is refused.
+    pub digest: String,
+    /// The seed of the run.
+    pub seed: u64,
+    /// The tasks' states.
+    pub progress: Progress,
+    /// What the robot knew of the room.
+    pub map: RoomMap,
+    /// Where the simulated robot stood (world frame): a resumed run starts
+    /// it there, as a robot switched off stays where it was.
+    pub sim_pose: Pose2,
+}
+
+/// The room as the robot knew it at a checkpoint.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoomMap {
+    /// Its size, m.
+    pub room_m: [f64; 2],
+    /// Its σ, m.
+    pub room_sigma_m: [f64; 2],
+    /// Its doors.
+    pub doors: Vec<DoorEstimate>,
+    /// The robot's estimated pose in it.
+    pub pose: Pose2,
+}
+
+/// FNV-1a digest of a mission file's text.
+fn digest(text: &str) -> String {
+    let mut h = fnv::FnvHasher::default();
+    h.write(text.as_bytes());
+    format!("fnv1a64:{:016x}", h.finish())
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it,
+/// flushed to disk, renamed over it, the folder flushed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp"));
+    {
+        let mut f = std::fs::File::create(&tmp)
+            .with_context(|| format!("cannot write {}", tmp.display()))?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+    }
+    std::fs::rename(&tmp, path).with_context(|| format!("cannot replace {}", path.display()))?;
+    if let Ok(d) = std::fs::File::open(dir) {
+        // Persists the rename; not every platform can sync a folder.
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Reads the checkpoint at `path` for `mission` (its text `text`), or
+/// says why it cannot be used — leaving the file as it is.
+fn read_checkpoint(path: &Path, mission: &Mission, text: &str) -> Result<Checkpoint> {
+    let raw = std::fs::read_to_string(path).map_err(|e| {
+        BadInput(format!(
+            "{}: cannot read the checkpoint: {e}",
+            path.display()
+        ))
+    })?;
+    let cp: Checkpoint = serde_json::from_str(&raw).map_err(|e| {
+        BadInput(format!(
+            "{}:{}:{}: the checkpoint is corrupt ({e}); it is left as it is",
+            path.display(),
+            e.line(),
+            e.column()
+        ))
+    })?;
+    if cp.mission != mission.name || cp.digest != digest(text) {
+        return Err(BadInput(format!(
+            "{}: the checkpoint was written for mission {:?} ({}), not this file ({:?}, {}); it is left as it is",
+            path.display(),
+            cp.mission,
+            cp.digest,
+            mission.name,
+            digest(text)
+        ))
+        .into());
+    }
+    Ok(cp)
+}
+
+/// Runs the task mission of `job`; `progress` hears the simulated time and
+/// the task under way of the first run.
+pub fn run_task_mission(
+    job: &TaskMissionJob,
+    progress: &(dyn Fn(f64, &str) + Sync),
+) -> Result<MissionSummary> {
+    let mission = Mission::load(&job.mission)?;
+    let text = std::fs::read_to_string(&job.mission)
+        .with_context(|| format!("cannot read {}", job.mission.display()))?;
+    if mission.tasks.is_empty() {
+        return Err(BadInput(format!("{}: no [[task]] in it", job.mission.display())).into());
+    }
+    let world_path = mission.world_path(&job.mission);
+    let mut world = WorldSpec::load(&world_path)
+        .map_err(|e| BadInput(format!("the world of {}: {e:#}", job.mission.display())))?;
+    if !mission.people {
+        world.people.clear();
+    }
+    let runs = job.runs.unwrap_or(mission.runs);
+    if runs == 0 {
+        return Err(BadInput(format!("{}: runs: at least one", job.mission.display())).into());
+    }
+    if job.resume && (job.out.is_none() || runs != 1) {
+        return Err(BadInput(
+            "--resume goes on from DIR/checkpoint.json: it needs --out DIR and one run".to_owned(),
+        )
+        .into());
+    }
+    let mut seed = job.seed.unwrap_or(mission.seed);
+    let mut resume = None;
+    if job.resume
+        && let Some(dir) = &job.out
+    {
+        let cp = read_checkpoint(&dir.join("checkpoint.json"), &mission, &text)?;
+        seed = job.seed.unwrap_or(cp.seed);
+        resume = Some(cp);
+    }
+    let setup = Setup {
+        mission: &mission,
+        text: &text,
+        world: &world,
+        resume: resume.as_ref(),
+        stop_after: job.stop_after_s,
+    };
+    let t0 = Instant::now();
+    let reports: Vec<MissionReport> = (0..runs)
+        .into_par_iter()
+        .map(|k| {
+            let out = job.out.as_ref().map(|d| {
+                if runs == 1 {
+                    d.clone()
+                } else {
+                    d.join(format!("seed-{}", seed + k))
+                }
+            });
+            let quiet = |_: f64, _: &str| {};
+            let hear: &(dyn Fn(f64, &str) + Sync) = if k == 0 { progress } else { &quiet };
+            run_once(&setup, seed + k, out.as_deref(), hear)
+        })
+        .collect::<Result<_>>()?;
+    let wall = t0.elapsed().as_secs_f64();
+    let sim: f64 = reports.iter().map(|r| r.sim_seconds).sum();
+    let done = reports.iter().filter(|r| r.outcome == "done").count();
+    let first_bad = reports.iter().find(|r| r.outcome != "done");
+    let summary = MissionSummary {
+        outcome: first_bad.map_or("done", |r| r.outcome.as_str()).to_owned(),
+        reason: first_bad.and_then(|r| r.reason.clone()),
+        mission: mission.name.clone(),
+        seed,
+        sim_seconds: sim,
+        wall_seconds: wall,
+        real_time_factor: sim / wall.max(1e-9),
+        done,
+        runs: reports,
+    };
+    if runs > 1
+        && let Some(dir) = &job.out
+    {
+        write_atomic(
+            &dir.join("report.json"),
+            serde_json::to_string_pretty(&summary)?.as_bytes(),
+        )?;
+    }
+    Ok(summary)
+}
+
+/// The true room the robot starts in: its south-west corner (the room
+/// frame's origin) and its size.
+fn true_room(layout: &Layout, start: &Pose2) -> Result<([f64; 2], [f64; 2])> {
+    let room = layout
+        .rooms
+        .iter()
+        .find(|r| {
+            let (lo, hi) = bounds(&r.corners);
+            (lo[0]..=hi[0]).contains(&start.x) && (lo[1]..=hi[1]).contains(&start.y)
+        })
+        .ok_or_else(|| BadInput(format!("the robot's start {start:?} is in no room")))?;
+    let (lo, hi) = bounds(&room.corners);
+    Ok((lo, [hi[0] - lo[0], hi[1] - lo[1]]))
+}
+
+fn bounds(points: &[Point2<f64>]) -> ([f64; 2], [f64; 2]) {
+    points.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p.x), lo[1].min(p.y)],
+                [hi[0].max(p.x), hi[1].max(p.y)],
+            )
+        },
+    )
+}
+
+/// What every run of a job shares.
+struct Setup<'a> {
+    mission: &'a Mission,
+    /// The mission file's text (for the checkpoint's digest).
+    text: &'a str,
+    world: &'a WorldSpec,
+    resume: Option<&'a Checkpoint>,
+    stop_after: Option<f64>,
+}
+
+/// One run of the mission with `seed`, writing into `out`.
+fn run_once(
+    setup: &Setup,
+    seed: u64,
+    out: Option<&Path>,
+    progress: &(dyn Fn(f64, &str) + Sync),
+) -> Result<MissionReport> {
+    let Setup {
+        mission,
+        text,
+        world,
+        resume,
+        stop_after,
+    } = *setup;
+    let t0 = Instant::now();
+    let layout = Layout::of(world);
+    let world_start = Pose2::new(
+        world.robot.at[0],
+        world.robot.at[1],
+        world.robot.heading_deg.to_radians(),
+    );
+    // The room is the one the robot was put in at the start.
+    let (origin, room_true) = true_room(&layout, &world_start)?;
+    let to_room = |p: &Pose2| Pose2::new(p.x - origin[0], p.y - origin[1], p.theta);
+    let known = mission
+        .start
+        .as_ref()
+        .ok_or_else(|| BadInput(format!("mission {:?}: no [start]", mission.name)))?;
+    let mut world = world.clone();
+    let (x0, size_sigma) = match resume {
+        // Where the robot stopped, knowing what it knew.
+        Some(cp) => {
+            world.robot.at = [cp.sim_pose.x, cp.sim_pose.y];
+            world.robot.heading_deg = cp.sim_pose.theta.to_degrees();
+            let p = cp.map.pose;
+            (
+                SVector::<f64, 5>::new(p.x, p.y, p.theta, cp.map.room_m[0], cp.map.room_m[1]),
+                cp.map.room_sigma_m,
+            )
+        }
+        // Where it was put, off by a known amount, the room as planned.
+        None => {
+            let s = to_room(&world_start);
+            let off = known.pose_sigma_m;
+            (
+                SVector::<f64, 5>::new(
+                    s.x + off,
+                    s.y - off,
+                    s.theta + 0.01,
+                    known.room_m[0],
+                    known.room_m[1],
+                ),
+                [known.room_sigma_m; 2],
+            )
+        }
+    };
+    let mut nav = Navigator::new(&world, seed, x0, size_sigma)?;
+    if let Some(cp) = resume {
+        for d in &cp.map.doors {
+            nav.add_known_door(d.wall.index(), d.position_m, d.width_m, d.sigma_m);
+        }
+    }
+    nav.discover_doors(true);
+    let vehicle = SimConfig::default().vehicle;
+    let mut exec = Executive::new(
+        ExecutiveConfig {
+            vehicle,
+            gains: GainSchedule::default(),
+            safety: mission.failsafe.clone(),
+            unattended: true,
+        },
+        mission.tasks.clone(),
+    );
+    if let Some(cp) = resume {
+        exec.resume_from(&cp.progress)
+            .map_err(|e| BadInput(format!("the checkpoint does not fit the mission: {e}")))?;
+    }
+    let first_task = exec
+        .status()
+        .iter()
+        .position(|s| *s == TaskStatus::Pending)
+        .unwrap_or(exec.tasks().len());
+    let mut events_file = match out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+            let path = dir.join("events.jsonl");
+            let f = std::fs::OpenOptions::new()
+                .create(true)
+                .append(resume.is_some())
+                .write(true)
+                .truncate(resume.is_none())
+                .open(&path)
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            Some(std::io::BufWriter::new(f))
+        }
+        None => None,
+    };
+    let save = |exec: &Executive, nav: &Navigator| -> Result<()> {
+        if let Some(dir) = out {
+            let est = nav.mission_estimate();
+            let cp = Checkpoint {
+                mission: mission.name.clone(),
+                digest: digest(text),
+                seed,
+                progress: exec.progress(),
+                map: RoomMap {
+                    room_m: est.room_m,
+                    room_sigma_m: est.room_sigma_m,
+                    doors: est.doors.clone(),
+                    pose: est.pose,
+                },
+                sim_pose: nav.truth(),
+            };
+            write_atomic(
+                &dir.join("checkpoint.json"),
+                serde_json::to_string_pretty(&cp)?.as_bytes(),
+            )?;
+        }
+        Ok(())
+    };
+    let mut trace = Trace::default();
+    let mut bumper = false;
+    let mut events = 0usize;
+    let mut safety_stops = 0usize;
+    let mut task_started: Vec<Option<Stamp>> = vec![None; exec.tasks().len()];
+    let mut task_seconds: Vec<Option<f64>> = vec![None; exec.tasks().len()];
+    let mut time_out = None;
+    let mut stopped = false;
+    let limit = mission.time_limit_s;
+    let mut step = 0usize;
+    loop {
+        let now = nav.now();
+        let est = nav.mission_estimate();
+        let out_ = exec.tick(
+            now,
+            &Inputs {
+                estimate: &est,
+                obstacles: nav.obstacles(),
+                bumper,
+                estop: false,
+                operator: &[],
+            },
+        );
+        for e in &out_.events {
+            match &e.kind {
+                EventKind::TaskStarted { task, .. } => task_started[*task] = Some(e.stamp),
+                EventKind::TaskDone { task }
+                | EventKind::TaskSkipped { task }
+                | EventKind::TaskFailed { task, .. } => {
+                    task_seconds[*task] = task_started[*task].map(|t| e.stamp.seconds_since(t));
+                }
+                EventKind::SafetyStop { .. } => safety_stops += 1,
+                _ => {}
+            }
+            write_event(&mut events_file, e)?;
+            events += 1;
+        }
+        if out_.checkpoint_due {
+            save(&exec, &nav)?;
+        }
+        if exec.mode().is_final() {
+            break;
+        }
+        if now.as_secs_f64() > limit {
+            time_out = Some(format!("time limit: {limit} s of simulated time"));
+            break;
+        }
+        if stop_after.is_some_and(|t| now.as_secs_f64() >= t) {
+            stopped = true;
+            break;
+        }
+        bumper = nav.drive(out_.drive);
+        let truth = to_room(&nav.truth());
+        if step.is_multiple_of(5) {
+            trace.push(&nav.mission_estimate().pose, &truth);
+        }
+        trace.errors(&nav.mission_estimate().pose, &truth);
+        step += 1;
+        if step.is_multiple_of(50) {
+            let task = exec.current_task().map_or("", |t| t.1);
+            progress(nav.now().as_secs_f64(), task);
+        }
+    }
+    if let Some(w) = events_file.as_mut() {
+        w.flush()?;
+    }
+    save(&exec, &nav)?;
+    let est = nav.mission_estimate();
+    let (outcome, reason) = match (exec.mode(), time_out) {
+        _ if stopped => (
+            "stopped",
+            Some(format!(
+                "stopped after {:.1} s as asked",
+                nav.now().as_secs_f64()
+            )),
+        ),
+        (_, Some(r)) => ("failed", Some(r)),
+        (MissionMode::Done, None) => ("done", None),
+        (MissionMode::Aborted, None) => ("aborted", Some("aborted by the operator".to_owned())),
+        (MissionMode::Failed { reason }, None) => ("failed", Some(reason.clone())),
+        (other, None) => ("failed", Some(format!("stopped while {other:?}"))),
+    };
+    let true_doors: Vec<Point2<f64>> = layout
+        .openings
+        .iter()
+        .filter(|o| o.kind == OpeningKind::OpenDoor)
+        .map(|o| Point2::from((o.edges[0].coords + o.edges[1].coords) / 2.0))
+        .map(|c| Point2::new(c.x - origin[0], c.y - origin[1]))
+        .collect();
+    let doors = est
+        .doors
+        .iter()
+        .map(|d| {
+            let g = stucco_mission::WallGeometry::of(d.wall, est.room_m);
+            let c = Point2::from(g.point(d.position_m, 0.0));
+            DoorReport {
+                wall: d.wall,
+                position_m: d.position_m,
+                width_m: d.width_m,
+                error_m: true_doors
+                    .iter()
+                    .map(|t| (t - c).norm())
+                    .fold(f64::INFINITY, f64::min),
+            }
+        })
+        .collect();
+    let wall = t0.elapsed().as_secs_f64();
+    let sim = nav.now().as_secs_f64();
+    let n = trace.n.max(1) as f64;
+    let report = MissionReport {
+        outcome: outcome.to_owned(),
+        reason,
+        mission: mission.name.clone(),
+        seed,
+        sim_seconds: sim,
+        wall_seconds: wall,
+        real_time_factor: sim / wall.max(1e-9),
+        tasks: exec
+            .tasks()
+            .iter()
+            .zip(exec.status())
+            .zip(&task_seconds)
+            .map(|((t, s), secs)| TaskReport {
+                name: t.name().to_owned(),
+                status: s.clone(),
+                seconds: *secs,
+            })
+            .collect(),
+        first_task,
+        pose_rms_m: (trace.pos2 / n).sqrt(),
+        pose_max_m: trace.pos_max,
+        heading_rms_rad: (trace.head2 / n).sqrt(),
+        room_m: est.room_m,
+        room_true_m: room_true,
+        room_sigma_m: est.room_sigma_m,
+        walls_seen: est.walls_seen,
+        doors,
+        path_length_m: trace.length,
+        safety_stops,
+        events,
+    };
+    if let Some(dir) = out {
+        write_atomic(
+            &dir.join("report.json"),
+            serde_json::to_string_pretty(&report)?.as_bytes(),
+        )?;
+        draw_run(&dir.join("map.svg"), &layout, origin, &trace, &est)?;
+    }
+    Ok(report)
+}
+
+fn write_event(file: &mut Option<impl Write>, e: &Event) -> Result<()> {
+    if let Some(f) = file {
+        serde_json::to_writer(&mut *f, e)?;
+        f.write_all(b"\n")?;
+    }
+    Ok(())
+}
+
+/// The estimated and true trajectories (room frame) and their errors.
+#[derive(Default)]
+struct Trace {
+    estimated: Vec<[f64; 2]>,
+    truth: Vec<[f64; 2]>,
+    pos2: f64,
+    head2: f64,
+    pos_max: f64,
+    n: usize,
+    length: f64,
+    last: Option<Pose2>,
+}
+
+impl Trace {
+    fn push(&mut self, est: &Pose2, truth: &Pose2) {
+        self.estimated.push([est.x, est.y]);
+        self.truth.push([truth.x, truth.y]);
+    }
+
+    fn errors(&mut self, est: &Pose2, truth: &Pose2) {
+        let e = (est.position() - truth.position()).norm();
+        self.pos2 += e * e;
+        self.pos_max = self.pos_max.max(e);
+        self.head2 += wrap_angle(est.theta - truth.theta).powi(2);
+        self.n += 1;
+        if let Some(l) = self.last {
+            self.length += (truth.position() - l.position()).norm();
+        }
+        self.last = Some(*truth);
+    }
+}
+
+/// The map of a run: the true walls, the room as estimated, the true
+/// (blue) and estimated (red) paths, the doors found.
+fn draw_run(
+    path: &Path,
+    layout: &Layout,
+    origin: [f64; 2],
+    trace: &Trace,
+    est: &stucco_mission::Estimate,
+) -> Result<()> {
+    use plotters::prelude::*;
+    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("drawing {}: {e}", path.display());
+    let walls: Vec<((f64, f64), (f64, f64))> = layout
+        .walls
+        .iter()
+        .map(|w| {
+            (
+                (w.a.x - origin[0], w.a.y - origin[1]),
+                (w.b.x - origin[0], w.b.y - origin[1]),
+            )
+        })
+        .collect();
+    let [xs, ys] = est.room_m;
+    let span = xs.max(ys) + 1.0;
+    let (cx, cy) = (xs / 2.0, ys / 2.0);
+    let root = SVGBackend::new(path, (900, 900)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "stucco run: true walls (black), room estimated (green), true path (blue), estimated path (red), doors found (orange)",
+            ("sans-serif", 13),
+        )
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(40)
+        .build_cartesian_2d(
+            cx - span / 2.0..cx + span / 2.0,
+            cy - span / 2.0..cy + span / 2.0,
+        )
+        .map_err(|e| err(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("x in the room (m)")
+        .y_desc("y in the room (m)")
+        .draw()
+        .map_err(|e| err(&e))?;
+    chart
+        .draw_series(
+            walls
+                .iter()
+                .map(|(a, b)| PathElement::new(vec![*a, *b], BLACK.stroke_width(2))),
+        )
+        .map_err(|e| err(&e))?;
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            vec![(0.0, 0.0), (xs, 0.0), (xs, ys), (0.0, ys), (0.0, 0.0)],
+            GREEN.stroke_width(1),
+        )))
+        .map_err(|e| err(&e))?;
+    chart
+        .draw_series(LineSeries::new(
+            trace.truth.iter().map(|p| (p[0], p[1])),
+            BLUE.mix(0.6),
+        ))
+        .map_err(|e| err(&e))?;
+    chart
+        .draw_series(LineSeries::new(
+            trace.estimated.iter().map(|p| (p[0], p[1])),
+            RED.mix(0.6),
+        ))
+        .map_err(|e| err(&e))?;
+    chart
+        .draw_series(est.doors.iter().map(|d| {
+            let g = stucco_mission::WallGeometry::of(d.wall, est.room_m);
+            let c = g.point(d.position_m, 0.0);
+            Circle::new((c.x, c.y), 6, RGBColor(255, 140, 0).filled())
+        }))
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}

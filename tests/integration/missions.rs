@@ -1,0 +1,182 @@
+//! Task missions through `stucco run`: the demo carried out end to end and
+//! scored against the truth, the files a run writes, a run stopped and
+//! resumed from its checkpoint, bad checkpoints and bad tasks refused.
+
+use std::path::{Path, PathBuf};
+use stucco_cli::{BadInput, MissionSummary, TaskMissionJob, run_task_mission};
+
+fn mission(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../missions")
+        .join(format!("{name}.toml"))
+}
+
+fn run(
+    path: &Path,
+    out: Option<&Path>,
+    resume: bool,
+    stop_after_s: Option<f64>,
+) -> anyhow::Result<MissionSummary> {
+    run_task_mission(
+        &TaskMissionJob {
+            mission: path.to_owned(),
+            seed: None,
+            runs: None,
+            out: out.map(Path::to_owned),
+            resume,
+            stop_after_s,
+        },
+        &|_, _| {},
+    )
+}
+
+fn events(dir: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(dir.join("events.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// The demo maps the living room (the walls it can see, the room's size,
+/// the door), and leaves through the door it found.
+#[test]
+fn the_demo_maps_the_room_and_leaves_through_the_door_it_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = run(&mission("demo"), Some(dir.path()), false, None).unwrap();
+    let r = &s.runs[0];
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    assert!(r.tasks.iter().all(|t| t.seconds.is_some()));
+    // North and south walls seen: the depth within 5 mm; the sofa hides
+    // most of the west wall, the width still within 1 cm.
+    assert!(
+        (r.room_m[1] - r.room_true_m[1]).abs() < 0.005,
+        "{:?}",
+        r.room_m
+    );
+    assert!(
+        (r.room_m[0] - r.room_true_m[0]).abs() < 0.01,
+        "{:?}",
+        r.room_m
+    );
+    // The door in the north wall, found within 3 cm, about its width.
+    assert_eq!(r.doors.len(), 1, "{:?}", r.doors);
+    let door = &r.doors[0];
+    assert!(door.error_m < 0.03, "{door:?}");
+    assert!(
+        door.width_m.is_some_and(|w| (w - 0.9).abs() < 0.05),
+        "{door:?}"
+    );
+    assert!(
+        r.pose_max_m < 0.05,
+        "position off by up to {} m",
+        r.pose_max_m
+    );
+    // What the run writes.
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    for key in [
+        "outcome",
+        "seed",
+        "sim_seconds",
+        "wall_seconds",
+        "real_time_factor",
+    ] {
+        assert!(!report[key].is_null(), "report.json has no {key}");
+    }
+    let ev = events(dir.path());
+    assert_eq!(ev.first().unwrap()["event"], "mission_started");
+    assert_eq!(ev.last().unwrap()["event"], "mission_done");
+    let svg = std::fs::read_to_string(dir.path().join("map.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.len() > 1000);
+}
+
+/// The same seed gives the same run, event for event.
+#[test]
+fn the_same_seed_gives_the_same_events() {
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    run(&mission("demo"), Some(a.path()), false, Some(35.0)).unwrap();
+    run(&mission("demo"), Some(b.path()), false, Some(35.0)).unwrap();
+    let read = |d: &Path| std::fs::read(d.join("events.jsonl")).unwrap();
+    assert_eq!(read(a.path()), read(b.path()));
+}
+
+/// Switched off during its third task and started again with `--resume`,
+/// the demo finishes without doing the first two again.
+#[test]
+fn a_stopped_run_resumes_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = run(&mission("demo"), Some(dir.path()), false, Some(40.0)).unwrap();
+    assert_eq!(first.outcome, "stopped");
+    let cp: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("checkpoint.json")).unwrap())
+            .unwrap();
+    let states: Vec<&str> = cp["progress"]["status"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["state"].as_str().unwrap())
+        .collect();
+    assert_eq!(states, ["done", "done", "active"]);
+    let before = events(dir.path()).len();
+    let second = run(&mission("demo"), Some(dir.path()), true, None).unwrap();
+    assert_eq!(second.outcome, "done", "{:?}", second.reason);
+    assert_eq!(second.runs[0].first_task, 2);
+    // Only the unfinished task started again.
+    let again: Vec<u64> = events(dir.path())[before..]
+        .iter()
+        .filter(|e| e["event"] == "task_started")
+        .map(|e| e["task"].as_u64().unwrap())
+        .collect();
+    assert_eq!(again, [2]);
+}
+
+/// A corrupt checkpoint, or one of another mission, is refused as bad
+/// input and left as it was.
+#[test]
+fn a_bad_checkpoint_is_refused_and_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("checkpoint.json");
+    std::fs::write(&path, "{\"mission\": \"demo").unwrap();
+    let err = run(&mission("demo"), Some(dir.path()), true, None).unwrap_err();
+    assert!(err.downcast_ref::<BadInput>().is_some(), "{err:#}");
+    assert!(format!("{err:#}").contains("corrupt"), "{err:#}");
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        "{\"mission\": \"demo"
+    );
+    // A checkpoint written by another version of the mission file.
+    run(&mission("demo"), Some(dir.path()), false, Some(5.0)).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let other = text.replace("fnv1a64:", "fnv1a64:0");
+    std::fs::write(&path, &other).unwrap();
+    let err = run(&mission("demo"), Some(dir.path()), true, None).unwrap_err();
+    assert!(format!("{err:#}").contains("not this file"), "{err:#}");
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), other);
+}
+
+/// A task with a value out of range is refused with the file, the line
+/// and the key; an unknown task with what was expected.
+#[test]
+fn a_bad_task_names_file_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.toml");
+    let head = "name = \"x\"\nworld = \"w.toml\"\nseed = 1\n\n[start]\nroom_m = [5.0, 3.0]\nroom_sigma_m = 0.1\n\n";
+    std::fs::write(
+        &path,
+        format!("{head}[[task]]\ntask = \"map_room\"\n\n[[task]]\ntask = \"follow_wall\"\nwall = \"south\"\nstandoff_m = 0.6\nfrom_m = 3.0\nto_m = 4.0\nspeed_mps = 2.0\n"),
+    )
+    .unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:18") && err.contains("speed_mps"),
+        "{err}"
+    );
+    std::fs::write(&path, format!("{head}[[task]]\ntask = \"fly\"\n")).unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:10:8") && err.contains("map_room"),
+        "{err}"
+    );
+}
