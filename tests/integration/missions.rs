@@ -180,3 +180,25 @@ fn a_bad_task_names_file_line_and_key() {
         "{err}"
     );
 }
+
+/// A plastering pass along the reference room's south wall, past a
+/// radiator, after mapping the room: the true standoff holds within 5 mm
+/// over the whole pass.
+#[test]
+fn a_wall_pass_holds_its_standoff() {
+    let s = run(&mission("wall-pass"), None, false, None).unwrap();
+    let r = &s.runs[0];
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    for i in 0..2 {
+        assert!(
+            (r.room_m[i] - r.room_true_m[i]).abs() < 0.003,
+            "{:?}",
+            r.room_m
+        );
+    }
+    assert_eq!(r.passes.len(), 1);
+    let p = &r.passes[0];
+    // 1.3 m at 0.25 m/s and 50 Hz, less the slowing at the end.
+    assert!(p.samples > 200, "{p:?}");
+    assert!(p.max_error_m < 0.005, "{p:?}");
+}

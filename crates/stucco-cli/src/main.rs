@@ -175,6 +175,17 @@ fn print_run(r: &MissionReport) {
         r.path_length_m,
         r.safety_stops
     );
+    for p in &r.passes {
+        println!(
+            "  pass along the {:?} wall (task {}): standoff {:.2} m held to {:.1} mm RMS (max {:.1}, mean {:+.1})",
+            p.wall,
+            p.task,
+            p.standoff_m,
+            p.rms_error_m * 1e3,
+            p.max_error_m * 1e3,
+            p.mean_error_m * 1e3
+        );
+    }
     for d in &r.doors {
         println!(
             "  door in the {:?} wall at {:.3} m{}: {:.1} cm from the true door",

@@ -17,8 +17,8 @@ use std::time::Instant;
 use stucco_control::GainSchedule;
 use stucco_core::{Pose2, Stamp, wrap_angle};
 use stucco_mission::{
-    DoorEstimate, Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode, Progress,
-    TaskStatus,
+    BehaviourKind, DoorEstimate, Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode,
+    Progress, TaskSpec, TaskStatus, WallGeometry, WallName,
 };
 use stucco_sim::{Layout, OpeningKind, SimConfig, WorldSpec};
 
@@ -64,6 +64,26 @@ pub struct DoorReport {
     pub error_m: f64,
 }
 
+/// How well a wall pass held its standoff, measured on the true pose
+/// against the true wall, from the pass's start to its end.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassReport {
+    /// The task.
+    pub task: usize,
+    /// The wall.
+    pub wall: stucco_mission::WallName,
+    /// The standoff asked for, m.
+    pub standoff_m: f64,
+    /// Mean of the true standoff's error, m.
+    pub mean_error_m: f64,
+    /// Its RMS, m.
+    pub rms_error_m: f64,
+    /// Its largest magnitude, m.
+    pub max_error_m: f64,
+    /// Control periods measured.
+    pub samples: usize,
+}
+
 /// The report of one run (`DIR/report.json`).
 #[derive(Clone, Debug, Serialize)]
 pub struct MissionReport {
@@ -101,6 +121,8 @@ pub struct MissionReport {
     pub walls_seen: [usize; 4],
     /// The doors found or given.
     pub doors: Vec<DoorReport>,
+    /// The wall passes.
+    pub passes: Vec<PassReport>,
     /// Distance driven, m.
     pub path_length_m: f64,
     /// Times the supervisor stopped the robot.
@@ -479,6 +501,8 @@ fn run_once(
     let mut task_seconds: Vec<Option<f64>> = vec![None; exec.tasks().len()];
     let mut time_out = None;
     let mut stopped = false;
+    let mut passes: std::collections::BTreeMap<usize, (WallName, f64, Vec<f64>)> =
+        std::collections::BTreeMap::new();
     let limit = mission.time_limit_s;
     let mut step = 0usize;
     loop {
@@ -524,6 +548,26 @@ fn run_once(
         }
         bumper = nav.drive(out_.drive);
         let truth = to_room(&nav.truth());
+        // A pass's standoff, on the truth, from where the pass starts.
+        if let (
+            Some((task, _)),
+            Some(&BehaviourKind::FollowWall {
+                wall, standoff_m, ..
+            }),
+        ) = (exec.current_task(), exec.current_behaviour())
+            && let TaskSpec::FollowWall { from_m, to_m, .. } = exec.tasks()[task]
+        {
+            let g = WallGeometry::of(wall, room_true);
+            let p = truth.position().coords;
+            let at = g.position(&p);
+            if (to_m > from_m && at >= from_m) || (to_m < from_m && at <= from_m) {
+                passes
+                    .entry(task)
+                    .or_insert_with(|| (wall, standoff_m, Vec::new()))
+                    .2
+                    .push(g.distance(&p) - standoff_m);
+            }
+        }
         if step.is_multiple_of(5) {
             trace.push(&nav.mission_estimate().pose, &truth);
         }
@@ -564,7 +608,7 @@ fn run_once(
         .doors
         .iter()
         .map(|d| {
-            let g = stucco_mission::WallGeometry::of(d.wall, est.room_m);
+            let g = WallGeometry::of(d.wall, est.room_m);
             let c = Point2::from(g.point(d.position_m, 0.0));
             DoorReport {
                 wall: d.wall,
@@ -608,6 +652,21 @@ fn run_once(
         room_sigma_m: est.room_sigma_m,
         walls_seen: est.walls_seen,
         doors,
+        passes: passes
+            .into_iter()
+            .map(|(task, (wall, standoff_m, errs))| {
+                let n = errs.len().max(1) as f64;
+                PassReport {
+                    task,
+                    wall,
+                    standoff_m,
+                    mean_error_m: errs.iter().sum::<f64>() / n,
+                    rms_error_m: (errs.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+                    max_error_m: errs.iter().fold(0.0, |m: f64, e| m.max(e.abs())),
+                    samples: errs.len(),
+                }
+            })
+            .collect(),
         path_length_m: trace.length,
         safety_stops,
         events,
@@ -734,7 +793,7 @@ fn draw_run(
         .map_err(|e| err(&e))?;
     chart
         .draw_series(est.doors.iter().map(|d| {
-            let g = stucco_mission::WallGeometry::of(d.wall, est.room_m);
+            let g = WallGeometry::of(d.wall, est.room_m);
             let c = g.point(d.position_m, 0.0);
             Circle::new((c.x, c.y), 6, RGBColor(255, 140, 0).filled())
         }))
