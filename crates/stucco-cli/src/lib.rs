@@ -8,13 +8,15 @@
 //!   ([`Mission`]), closing the loop through [`Navigator`].
 //! - [`run_task_mission`]: the `stucco run` job for task missions: the
 //!   executive of `stucco-mission` in the simulator, with report, events,
-//!   map and checkpoints.
+//!   map and checkpoints; [`Recorder`] and [`replay_run`] record a run as
+//!   MCAP and replay it through the executive.
 #![warn(missing_docs)]
 
 mod carmen;
 mod experiments;
 mod mission;
 mod navigator;
+mod record;
 mod simbench;
 mod task_mission;
 mod walls;
@@ -23,6 +25,7 @@ pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
 pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
+pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
 pub use task_mission::{
     Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use stucco_cli::{
     BadInput, ExtractorKind, Mission, MissionReport, MissionSummary, RunJob, SimbenchJob,
-    TaskMissionJob, WallsJob, run_mission, run_simbench, run_task_mission, run_walls,
+    TaskMissionJob, WallsJob, replay_run, run_mission, run_simbench, run_task_mission, run_walls,
 };
 
 /// stucco: software of an autonomous spray-plastering robot.
@@ -62,7 +62,21 @@ enum Command {
         /// task mission's checkpoint keeps what was finished).
         #[arg(long)]
         stop_after: Option<f64>,
+        /// Record the run to DIR/run.mcap (sensor-derived inputs, commands,
+        /// events, the true pose; open it in Foxglove).
+        #[arg(long)]
+        record: bool,
         /// Print the report as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Replay a run recorded with `stucco run --record` through the
+    /// executive and check it gives the same command at every tick. Exit
+    /// code: 0 identical, 1 not, 2 bad input.
+    ReplayRun {
+        /// The recording (`DIR/run.mcap`).
+        recording: PathBuf,
+        /// Print the result as one JSON object on stdout.
         #[arg(long)]
         json: bool,
     },
@@ -271,6 +285,7 @@ fn main() -> ExitCode {
             out,
             resume,
             stop_after,
+            record,
             json,
         } => {
             let tasks = match Mission::load(&mission) {
@@ -286,6 +301,7 @@ fn main() -> ExitCode {
                         out,
                         resume,
                         stop_after_s: stop_after,
+                        record,
                     },
                     json,
                 )
@@ -300,6 +316,32 @@ fn main() -> ExitCode {
                 )
             }
         }
+        Command::ReplayRun { recording, json } => match replay_run(&recording) {
+            Ok(r) => {
+                if json {
+                    print_json(&r);
+                } else {
+                    println!(
+                        "{}: {} ticks replayed, {} commands identical{}",
+                        r.mission,
+                        r.ticks,
+                        r.identical,
+                        r.first_difference
+                            .map(|(t, a, b)| format!(
+                                "; first difference at {:.2} s: recorded {a:?}, replayed {b:?}",
+                                t.as_secs_f64()
+                            ))
+                            .unwrap_or_default()
+                    );
+                }
+                if r.identical == r.ticks && r.ticks > 0 {
+                    ExitCode::SUCCESS
+                } else {
+                    ExitCode::FAILURE
+                }
+            }
+            Err(e) => fail(&e),
+        },
         Command::Simbench {
             world,
             seed,

@@ -155,6 +155,13 @@ impl Mission {
     pub fn load(path: &Path) -> Result<Mission> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| BadInput(format!("cannot read {}: {e}", path.display())))?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and checks the text of a mission file (`path` names it in
+    /// errors).
+    pub fn parse(text: &str, path: &Path) -> Result<Mission> {
+        let text = text.to_owned();
         let mission: Mission = toml::from_str(&text).map_err(|e| {
             let (line, column) = e
                 .span()

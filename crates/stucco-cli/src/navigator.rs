@@ -36,6 +36,8 @@ pub struct Navigator {
     discover_doors: bool,
     /// Scans each room wall has been used in.
     walls_seen: [usize; 4],
+    /// Scans taken in.
+    scans: u64,
 }
 
 /// Sightings needed before an opening becomes a door of the map.
@@ -91,6 +93,7 @@ impl Navigator {
             door_widths: Vec::new(),
             discover_doors: false,
             walls_seen: [0; 4],
+            scans: 0,
         })
     }
 
@@ -108,6 +111,11 @@ impl Navigator {
     /// The world's static layout (for scoring and drawing).
     pub fn layout(&self) -> &Layout {
         self.sim.layout()
+    }
+
+    /// Scans taken in so far.
+    pub fn scans(&self) -> u64 {
+        self.scans
     }
 
     /// The last scan's echoes in the robot's frame.
@@ -195,6 +203,7 @@ impl Navigator {
             self.samples.push(*e);
         }
         for scan in &r.scans {
+            self.scans += 1;
             let twist = sensor_twist(
                 &twist_at(&self.samples, scan.stamp, &self.odometry),
                 &self.mount,

@@ -6,6 +6,7 @@
 
 use crate::mission::{BadInput, Mission};
 use crate::navigator::Navigator;
+use crate::record::{RecordedMission, Recorder};
 use anyhow::{Context, Result};
 use nalgebra::{Point2, SVector};
 use rayon::prelude::*;
@@ -38,6 +39,8 @@ pub struct TaskMissionJob {
     /// Stop after this much simulated time, as if the robot were switched
     /// off (the checkpoint keeps what was finished).
     pub stop_after_s: Option<f64>,
+    /// Record each run to `run.mcap` in its folder.
+    pub record: bool,
 }
 
 /// One task as the run left it.
@@ -271,6 +274,9 @@ pub fn run_task_mission(
     if runs == 0 {
         return Err(BadInput(format!("{}: runs: at least one", job.mission.display())).into());
     }
+    if job.record && job.out.is_none() {
+        return Err(BadInput("--record writes DIR/run.mcap: it needs --out DIR".to_owned()).into());
+    }
     if job.resume && (job.out.is_none() || runs != 1) {
         return Err(BadInput(
             "--resume goes on from DIR/checkpoint.json: it needs --out DIR and one run".to_owned(),
@@ -288,6 +294,8 @@ pub fn run_task_mission(
     }
     let setup = Setup {
         mission: &mission,
+        mission_path: &job.mission,
+        record: job.record,
         text: &text,
         world: &world,
         resume: resume.as_ref(),
@@ -365,6 +373,10 @@ fn bounds(points: &[Point2<f64>]) -> ([f64; 2], [f64; 2]) {
 /// What every run of a job shares.
 struct Setup<'a> {
     mission: &'a Mission,
+    /// Where the mission file is.
+    mission_path: &'a Path,
+    /// Record each run to `run.mcap`.
+    record: bool,
     /// The mission file's text (for the checkpoint's digest).
     text: &'a str,
     world: &'a WorldSpec,
@@ -381,6 +393,8 @@ fn run_once(
 ) -> Result<MissionReport> {
     let Setup {
         mission,
+        mission_path,
+        record,
         text,
         world,
         resume,
@@ -501,6 +515,19 @@ fn run_once(
     let mut task_seconds: Vec<Option<f64>> = vec![None; exec.tasks().len()];
     let mut time_out = None;
     let mut stopped = false;
+    let mut recorder = match (out, record) {
+        (Some(dir), true) => Some(Recorder::create(
+            &dir.join("run.mcap"),
+            &RecordedMission {
+                path: mission_path.display().to_string(),
+                text: text.to_owned(),
+                seed,
+                resumed_from: resume.map(|cp| cp.progress.clone()),
+            },
+        )?),
+        _ => None,
+    };
+    let mut scans_recorded = 0u64;
     let mut passes: std::collections::BTreeMap<usize, (WallName, f64, Vec<f64>)> =
         std::collections::BTreeMap::new();
     let limit = mission.time_limit_s;
@@ -508,16 +535,26 @@ fn run_once(
     loop {
         let now = nav.now();
         let est = nav.mission_estimate();
-        let out_ = exec.tick(
-            now,
-            &Inputs {
-                estimate: &est,
-                obstacles: nav.obstacles(),
-                bumper,
-                estop: false,
-                operator: &[],
-            },
-        );
+        let inputs = Inputs {
+            estimate: &est,
+            obstacles: nav.obstacles(),
+            bumper,
+            estop: false,
+            operator: &[],
+        };
+        let out_ = exec.tick(now, &inputs);
+        if let Some(r) = recorder.as_mut() {
+            let new_scan = nav.scans() != scans_recorded;
+            scans_recorded = nav.scans();
+            r.tick(
+                &inputs,
+                new_scan,
+                out_.drive,
+                out_.spray,
+                &out_.events,
+                &to_room(&nav.truth()),
+            )?;
+        }
         for e in &out_.events {
             match &e.kind {
                 EventKind::TaskStarted { task, .. } => task_started[*task] = Some(e.stamp),
@@ -580,6 +617,9 @@ fn run_once(
     }
     if let Some(w) = events_file.as_mut() {
         w.flush()?;
+    }
+    if let Some(r) = recorder {
+        r.finish()?;
     }
     save(&exec, &nav)?;
     let est = nav.mission_estimate();

@@ -21,7 +21,8 @@ pub struct DoorEstimate {
 }
 
 /// The navigation core's estimate, as the executive reads it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Estimate {
     /// When it holds.
     pub stamp: Stamp,
