@@ -200,6 +200,26 @@ fn print_run(r: &MissionReport) {
             p.mean_error_m * 1e3
         );
     }
+    for w in &r.windows {
+        println!(
+            "  window in the {:?} wall from {:.3} to {:.3} m, sill {:.3} m, head {:.3} m ({} passes){}",
+            w.wall,
+            w.along_m[0],
+            w.along_m[1],
+            w.sill_head_m[0],
+            w.sill_head_m[1],
+            w.observations,
+            w.edge_error_m
+                .map(|e| format!(": edges within {:.1} cm of the true window", e * 1e2))
+                .unwrap_or_else(|| ": no true window there".to_owned())
+        );
+    }
+    if r.windows_total > 0 {
+        println!(
+            "  windows found: {} of {}",
+            r.windows_found, r.windows_total
+        );
+    }
     for d in &r.doors {
         println!(
             "  door in the {:?} wall at {:.3} m{}: {:.1} cm from the true door",

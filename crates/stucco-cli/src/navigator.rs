@@ -8,9 +8,11 @@ use stucco_control::Limiter;
 use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp};
 use stucco_mission::{DoorEstimate, Estimate, WallGeometry, WallName};
 use stucco_nav::{
-    DoorConfig, DoorOpening, OdometryConfig, RoomConfig, RoomCovariance, RoomEkf, RoomEkfConfig,
-    RoomSearch, RoomState, ScanPoints, Wall, find_doors_moving, sensor_twist, twist_at,
+    DoorConfig, DoorOpening, OdometryConfig, ProfilePose, RoomConfig, RoomCovariance, RoomEkf,
+    RoomEkfConfig, RoomSearch, RoomState, ScanPoints, Wall, Window, WindowConfig, WindowFinder,
+    find_doors_moving, sensor_twist, twist_at,
 };
+use stucco_sim::CameraSpec;
 use stucco_sim::{Layout, SimConfig, Simulator, WorldSpec};
 
 /// Control period, s.
@@ -38,7 +40,17 @@ pub struct Navigator {
     walls_seen: [usize; 4],
     /// Scans taken in.
     scans: u64,
+    /// The range camera, if the robot has one.
+    camera: Option<CameraSpec>,
+    /// Windows found in each room wall by the camera.
+    windows: [WindowFinder; 4],
+    /// The wall the camera looked at last.
+    camera_wall: Option<usize>,
 }
+
+/// Smallest cosine between the camera's fan and a wall's normal for the
+/// profile to count for that wall.
+const CAMERA_INCIDENCE_COS: f64 = 0.9;
 
 /// Sightings needed before an opening becomes a door of the map.
 const DOOR_SIGHTINGS: usize = 5;
@@ -66,6 +78,7 @@ impl Navigator {
         let cfg = SimConfig::default();
         let vehicle = cfg.vehicle.clone();
         let cfg_laser = cfg.laser.clone();
+        let camera = cfg.camera.clone();
         let odometry = OdometryConfig::for_vehicle(&vehicle);
         let p0 = RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(
             4e-4,
@@ -94,6 +107,9 @@ impl Navigator {
             discover_doors: false,
             walls_seen: [0; 4],
             scans: 0,
+            camera,
+            windows: std::array::from_fn(|_| WindowFinder::new(WindowConfig::default())),
+            camera_wall: None,
         })
     }
 
@@ -232,6 +248,9 @@ impl Navigator {
                     .map(|q| self.mount.transform_point(&q.p)),
             );
         }
+        for profile in &r.profiles {
+            self.look_for_windows(profile);
+        }
         // The samples before the last scan are spent.
         if let Some(last) = r.scans.last() {
             let keep = self.samples.iter().rposition(|s| s.stamp <= last.stamp);
@@ -240,6 +259,57 @@ impl Navigator {
             }
         }
         r.bumper || self.sim.truth().bumper
+    }
+
+    /// The windows found by the camera, wall by wall.
+    pub fn windows(&self) -> Vec<(WallName, Window)> {
+        WallName::ALL
+            .iter()
+            .flat_map(|&w| {
+                self.windows[w.index()]
+                    .windows()
+                    .iter()
+                    .map(move |x| (w, *x))
+            })
+            .collect()
+    }
+
+    /// Hands a camera profile to the window finder of the wall it looks
+    /// at (on the estimate at hand); a change of wall ends the last one's
+    /// pass.
+    fn look_for_windows(&mut self, profile: &stucco_core::RangeProfile) {
+        let Some(cam) = &self.camera else {
+            return;
+        };
+        let est = self.mission_estimate();
+        let a = est.pose.theta + profile.azimuth_rad;
+        let h = nalgebra::Vector2::new(a.cos(), a.sin());
+        let p = est.pose.position().coords;
+        let target = WallName::ALL.iter().find_map(|&w| {
+            let g = WallGeometry::of(w, est.room_m);
+            let toward = -h.dot(&g.inward);
+            (toward >= CAMERA_INCIDENCE_COS).then(|| {
+                (
+                    w.index(),
+                    ProfilePose {
+                        along_m: g.position(&p),
+                        distance_m: g.distance(&p),
+                        height_m: cam.height_m,
+                        direction: nalgebra::Vector2::new(toward, h.dot(&g.along)),
+                    },
+                )
+            })
+        });
+        let now = target.map(|t| t.0);
+        if let Some(last) = self.camera_wall
+            && now != Some(last)
+        {
+            self.windows[last].end_pass();
+        }
+        self.camera_wall = now;
+        if let Some((w, pose)) = target {
+            self.windows[w].add(profile, &pose);
+        }
     }
 
     /// Counts the openings seen where the filter knows no door; one seen

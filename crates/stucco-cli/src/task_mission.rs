@@ -67,6 +67,22 @@ pub struct DoorReport {
     pub error_m: f64,
 }
 
+/// A window the camera found, against the true window it overlaps.
+#[derive(Clone, Debug, Serialize)]
+pub struct WindowReport {
+    /// The wall.
+    pub wall: WallName,
+    /// Its edges along the wall, m.
+    pub along_m: [f64; 2],
+    /// Its sill and head, m.
+    pub sill_head_m: [f64; 2],
+    /// Passes fused into it.
+    pub observations: usize,
+    /// Largest error of its four edges against the true window it overlaps
+    /// (none: it overlaps no true window), m.
+    pub edge_error_m: Option<f64>,
+}
+
 /// How well a wall pass held its standoff, measured on the true pose
 /// against the true wall, from the pass's start to its end.
 #[derive(Clone, Debug, Serialize)]
@@ -126,6 +142,14 @@ pub struct MissionReport {
     pub doors: Vec<DoorReport>,
     /// The wall passes.
     pub passes: Vec<PassReport>,
+    /// The windows found by the camera.
+    pub windows: Vec<WindowReport>,
+    /// True windows of the room found (a reported window overlaps them).
+    pub windows_found: usize,
+    /// True windows in the room.
+    pub windows_total: usize,
+    /// Largest edge error over the windows found, m.
+    pub window_edge_err_max_m: Option<f64>,
     /// Distance driven, m.
     pub path_length_m: f64,
     /// Times the supervisor stopped the robot.
@@ -661,6 +685,83 @@ fn run_once(
             }
         })
         .collect();
+    // True windows of the room, in the room frame: wall, along-range, z.
+    let room_name = layout
+        .rooms
+        .iter()
+        .find(|r| {
+            let (lo, hi) = bounds(&r.corners);
+            (lo[0]..=hi[0]).contains(&world_start.x) && (lo[1]..=hi[1]).contains(&world_start.y)
+        })
+        .map(|r| r.name.clone())
+        .unwrap_or_default();
+    let true_windows: Vec<(WallName, [f64; 2], [f64; 2])> = layout
+        .openings
+        .iter()
+        .filter(|o| {
+            o.room == room_name && matches!(o.kind, OpeningKind::Window | OpeningKind::GlazedWindow)
+        })
+        .filter_map(|o| {
+            let e: Vec<nalgebra::Vector2<f64>> = o
+                .edges
+                .iter()
+                .map(|p| nalgebra::Vector2::new(p.x - origin[0], p.y - origin[1]))
+                .collect();
+            let mid = (e[0] + e[1]) / 2.0;
+            WallName::ALL.iter().find_map(|&w| {
+                let g = WallGeometry::of(w, room_true);
+                (g.distance(&mid).abs() < 0.2).then(|| {
+                    let (a, b) = (g.position(&e[0]), g.position(&e[1]));
+                    (w, [a.min(b), a.max(b)], o.z)
+                })
+            })
+        })
+        .collect();
+    let windows: Vec<WindowReport> = nav
+        .windows()
+        .into_iter()
+        .map(|(wall, w)| {
+            let truth = true_windows.iter().find(|(tw, a, z)| {
+                *tw == wall
+                    && a[0] < w.along_m[1]
+                    && w.along_m[0] < a[1]
+                    && z[0] < w.sill_head_m[1]
+                    && w.sill_head_m[0] < z[1]
+            });
+            WindowReport {
+                wall,
+                along_m: w.along_m,
+                sill_head_m: w.sill_head_m,
+                observations: w.observations,
+                edge_error_m: truth.map(|(_, a, z)| {
+                    [
+                        w.along_m[0] - a[0],
+                        w.along_m[1] - a[1],
+                        w.sill_head_m[0] - z[0],
+                        w.sill_head_m[1] - z[1],
+                    ]
+                    .iter()
+                    .fold(0.0, |m: f64, e| m.max(e.abs()))
+                }),
+            }
+        })
+        .collect();
+    let windows_found = true_windows
+        .iter()
+        .filter(|(tw, a, z)| {
+            windows.iter().any(|w| {
+                w.wall == *tw
+                    && a[0] < w.along_m[1]
+                    && w.along_m[0] < a[1]
+                    && z[0] < w.sill_head_m[1]
+                    && w.sill_head_m[0] < z[1]
+            })
+        })
+        .count();
+    let window_edge_err_max_m = windows
+        .iter()
+        .filter_map(|w| w.edge_error_m)
+        .reduce(f64::max);
     let wall = t0.elapsed().as_secs_f64();
     let sim = nav.now().as_secs_f64();
     let n = trace.n.max(1) as f64;
@@ -707,6 +808,10 @@ fn run_once(
                 }
             })
             .collect(),
+        windows,
+        windows_found,
+        windows_total: true_windows.len(),
+        window_edge_err_max_m,
         path_length_m: trace.length,
         safety_stops,
         events,

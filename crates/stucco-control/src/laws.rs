@@ -133,15 +133,21 @@ pub struct WallFollower {
     pub side: WallSide,
     /// Distance to keep from the wall, m.
     pub standoff_m: f64,
+    /// Steepest angle the law heads toward the standoff line from far off
+    /// it, rad: the body's front corner must not dive at the wall (or a
+    /// radiator on it) while the robot settles on its standoff.
+    pub max_approach_rad: f64,
 }
 
 impl WallFollower {
-    /// The law keeping `standoff_m` from a wall on `side`.
+    /// The law keeping `standoff_m` from a wall on `side`, approaching it
+    /// at 20° at most.
     pub fn new(gains: GainSchedule, side: WallSide, standoff_m: f64) -> Self {
         WallFollower {
             law: LineFollower::new(gains),
             side,
             standoff_m,
+            max_approach_rad: 20f64.to_radians(),
         }
     }
 
@@ -155,8 +161,14 @@ impl WallFollower {
         };
         let heading = wrap_angle(along - gamma_rad);
         // Offset to the left of the line at the standoff: farther than the
-        // standoff from a wall on the left is to the line's right.
-        let offset = sign * (d_m - self.standoff_m);
+        // standoff from a wall on the left is to the line's right. Far off
+        // the line, the law sees no more offset than holds it heading in at
+        // `max_approach_rad` (where its steering is zero:
+        // k1·y + k2·sin θ = tan θ).
+        let (k1, k2) = self.law.gains.at(speed_mps);
+        let a = self.max_approach_rad;
+        let cap = (a.tan() + k2 * a.sin()) / k1.max(1e-9);
+        let offset = (sign * (d_m - self.standoff_m)).clamp(-cap, cap);
         self.law.steer(offset, heading, speed_mps)
     }
 }

@@ -53,6 +53,12 @@ pub enum BehaviourKind {
         /// The goal pose.
         goal: Pose2,
     },
+    /// Backing along the line through `goal` (the robot facing along its
+    /// heading) to it.
+    Reverse {
+        /// The goal pose.
+        goal: Pose2,
+    },
     /// Following a wall at a standoff up to a position along it.
     FollowWall {
         /// The wall.
@@ -84,6 +90,7 @@ enum Law {
     Hold,
     Pivot,
     Regulate(PoseRegulator),
+    Reverse(PoseRegulator),
     Wall {
         law: WallFollower,
         speed_mps: f64,
@@ -121,6 +128,20 @@ impl Behaviour {
         Behaviour {
             kind: BehaviourKind::Regulate { goal },
             law: Law::Regulate(law),
+            started: None,
+        }
+    }
+
+    /// Backing along the line through `goal` to it, the robot facing the
+    /// goal's heading. The rear axle's kinematics are the same backward
+    /// with the heading turned half round and the steering negated, so the
+    /// forward law drives a mirrored robot and its command is mirrored back.
+    pub fn reverse_to(gains: &GainSchedule, goal: Pose2, speed_mps: f64) -> Self {
+        let mut law = PoseRegulator::new(gains.clone(), speed_mps);
+        law.tolerance_m = 0.005;
+        Behaviour {
+            kind: BehaviourKind::Reverse { goal },
+            law: Law::Reverse(law),
             started: None,
         }
     }
@@ -182,6 +203,7 @@ impl Behaviour {
             BehaviourKind::Hold => "hold",
             BehaviourKind::Pivot { .. } => "pivot",
             BehaviourKind::Regulate { .. } => "regulate",
+            BehaviourKind::Reverse { .. } => "reverse",
             BehaviourKind::FollowWall { .. } => "follow_wall",
             BehaviourKind::Path { .. } => "path",
         }
@@ -245,6 +267,20 @@ impl Behaviour {
                 Step::Drive(law.command(&pose, goal))
             }
             (Law::Regulate(_), _) => Step::Done,
+            (Law::Reverse(law), BehaviourKind::Reverse { goal }) => {
+                let mirror = |p: &Pose2| Pose2::new(p.x, p.y, p.theta + std::f64::consts::PI);
+                let (m, g) = (mirror(&pose), mirror(goal));
+                let rel = g.inverse() * m;
+                if -rel.x <= law.tolerance_m {
+                    return Step::Done;
+                }
+                let cmd = law.command(&m, &g);
+                Step::Drive(DriveCommand {
+                    speed_mps: -cmd.speed_mps,
+                    steer_rad: -cmd.steer_rad,
+                })
+            }
+            (Law::Reverse(_), _) => Step::Done,
             (
                 Law::Wall {
                     law,

@@ -668,7 +668,10 @@ impl Executive {
                 speed_mps,
             } => {
                 let goal = pose_at_wall(*wall, est.room_m, *at_m, *standoff_m, *side);
-                queue.extend(self.approach(&pose, &goal, *wall, est, clearance, *speed_mps)?);
+                queue.extend(
+                    self.approach(&pose, &goal, *wall, est, clearance, *speed_mps)?
+                        .0,
+                );
                 let g = WallGeometry::of(*wall, est.room_m);
                 let forward = g
                     .along
@@ -702,7 +705,9 @@ impl Executive {
                 }
                 let side = g.side_for(forward);
                 let start = pose_at_wall(*wall, est.room_m, *from_m, *standoff_m, side);
-                queue.extend(self.approach(&pose, &start, *wall, est, clearance, *speed_mps)?);
+                let (way, turn_at) =
+                    self.approach(&pose, &start, *wall, est, clearance, *speed_mps)?;
+                queue.extend(way);
                 queue.push_back(Behaviour::follow_wall(
                     gains,
                     *wall,
@@ -710,6 +715,27 @@ impl Executive {
                     *standoff_m,
                     *to_m,
                     forward,
+                    *speed_mps,
+                ));
+                // A pass ends too near the wall to turn on the spot: back out
+                // along the standoff to where the robot turned in, then drive
+                // forward out to a lane as far from the wall as that turn
+                // point (the front leads away from the wall; backing out of
+                // the line would swing it into the wall).
+                let g = WallGeometry::of(*wall, est.room_m);
+                let dir = if forward { 1.0 } else { -1.0 };
+                let turned_at = g.position(&turn_at.position().coords);
+                let back = g.point(turned_at, *standoff_m);
+                queue.push_back(Behaviour::reverse_to(
+                    gains,
+                    Pose2::new(back.x, back.y, start.theta),
+                    *speed_mps,
+                ));
+                let lane = g.distance(&turn_at.position().coords);
+                let out = g.point(turned_at + dir * RUN_IN_M, lane);
+                queue.push_back(Behaviour::regulate(
+                    gains,
+                    Pose2::new(out.x, out.y, start.theta),
                     *speed_mps,
                 ));
             }
@@ -781,7 +807,7 @@ impl Executive {
         est: &Estimate,
         clearance: f64,
         speed_mps: f64,
-    ) -> Result<Vec<Behaviour>, String> {
+    ) -> Result<(Vec<Behaviour>, Pose2), String> {
         let g = WallGeometry::of(wall, est.room_m);
         let gp = goal.position().coords;
         let dir = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
@@ -807,11 +833,10 @@ impl Executive {
             ));
         }
         let p = g.point(p_at, standoff.max(clearance));
-        Ok(go_to(
-            &self.config.gains,
-            from,
-            &Pose2::new(p.x, p.y, goal.theta),
-            speed_mps,
+        let turn_at = Pose2::new(p.x, p.y, goal.theta);
+        Ok((
+            go_to(&self.config.gains, from, &turn_at, speed_mps),
+            turn_at,
         ))
     }
 

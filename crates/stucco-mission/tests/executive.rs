@@ -69,8 +69,7 @@ fn executive(tasks: Vec<TaskSpec>, unattended: bool) -> Executive {
     )
 }
 
-/// Runs until the mission is over or `seconds` pass; the events, and the
-/// lowest standoff seen while following `watch` (if given).
+/// Runs until the mission is over or `seconds` pass; the events.
 fn run(
     exec: &mut Executive,
     robot: &mut Robot,
@@ -145,7 +144,7 @@ fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
         vec![TaskSpec::FollowWall {
             wall: WallName::South,
             standoff_m: 0.6,
-            from_m: 2.6,
+            from_m: 3.0,
             to_m: 4.0,
             speed_mps: 0.25,
         }],
@@ -153,6 +152,7 @@ fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
     );
     let mut worst = 0.0f64;
     let mut following = 0;
+    let mut farthest = 0.0f64;
     let steps = (120.0 / DT) as usize;
     for _ in 0..steps {
         let est = robot.estimate();
@@ -170,10 +170,11 @@ fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
         if matches!(
             exec.current_behaviour(),
             Some(BehaviourKind::FollowWall { .. })
-        ) && robot.pose.x >= 2.6
+        ) && robot.pose.x >= 3.0
         {
             following += 1;
             worst = worst.max((robot.pose.y - 0.6).abs());
+            farthest = farthest.max(robot.pose.x);
         }
         robot.drive(out.drive);
         if exec.mode().is_final() {
@@ -183,7 +184,19 @@ fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
     assert_eq!(exec.mode(), &MissionMode::Done);
     assert!(following > 100, "{following} steps along the wall");
     assert!(worst < 0.01, "standoff off by {worst} m");
-    assert!((robot.pose.x - 4.0).abs() < 0.02, "{:?}", robot.pose);
+    assert!(
+        (farthest - 4.0).abs() < 0.02,
+        "the pass ended at {farthest}"
+    );
+    // Then it backed out along the wall to where it turned in (1.01 m from
+    // the west wall) and drove out to a lane as far from the south wall,
+    // free to turn again.
+    assert!(
+        (robot.pose.x - 3.01).abs() < 0.02 && (robot.pose.y - 1.01).abs() < 0.02,
+        "{:?}",
+        robot.pose
+    );
+    assert!(robot.pose.theta.abs() < 0.02);
 }
 
 #[test]

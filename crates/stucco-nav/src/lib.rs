@@ -52,6 +52,7 @@ mod rwht;
 mod segments;
 pub mod synthetic;
 mod wall;
+mod windows;
 
 pub use door::{DoorConfig, DoorOpening, find_doors, find_doors_moving};
 pub use error::NavError;
@@ -69,3 +70,4 @@ pub use room_ekf::{
 pub use rwht::{RwhtConfig, RwhtExtractor};
 pub use segments::{Segment, SegmentTransform, Segmenter};
 pub use wall::Wall;
+pub use windows::{ProfilePose, Window, WindowConfig, WindowFinder};

@@ -1,0 +1,459 @@
+//! Windows found in the profiles of a range camera looking at a wall while
+//! the robot drives along it.
+//!
+//! Each profile is a vertical fan of rays in a plane across the wall. A ray
+//! that meets the wall's face is on the wall; one that goes through it (no
+//! echo, or an echo well behind the face) crosses a hole at the height where
+//! it passes the face. A run of such rays in one profile is a gap in the
+//! wall at that position along it; gaps in consecutive profiles that
+//! overlap in height are one window. Its sill and head lie between the last
+//! ray on the wall and the first through the hole — exactly where a ray
+//! meets the sill's top or the lintel's underside inside the wall's
+//! thickness — and its left and right edges halfway between the last
+//! profile on the wall and the first through the hole. Windows seen on
+//! several passes are fused.
+
+use nalgebra::Vector2;
+use serde::{Deserialize, Serialize};
+use stucco_core::RangeProfile;
+
+/// Settings of the window finder.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WindowConfig {
+    /// An echo within this of the wall's face lies on it, m.
+    pub face_tolerance_m: f64,
+    /// Echoes this far behind the face are the opening's reveal (the
+    /// sill's top, the lintel's underside), m.
+    pub reveal_depth_m: f64,
+    /// Smallest window reported, m (width and height).
+    pub min_size_m: f64,
+    /// Profiles meeting the wall more obliquely than this are not used
+    /// (cosine of the angle between the fan's plane and the wall's normal).
+    pub min_incidence_cos: f64,
+}
+
+impl Default for WindowConfig {
+    fn default() -> Self {
+        WindowConfig {
+            face_tolerance_m: 0.04,
+            reveal_depth_m: 0.35,
+            min_size_m: 0.4,
+            min_incidence_cos: 0.9,
+        }
+    }
+}
+
+/// Where the camera was for one profile, in the frame of the wall: its
+/// position along the wall, its distance from the face, the height of the
+/// sensor, and the fan's horizontal direction relative to the wall.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProfilePose {
+    /// Position along the wall of the sensor, m.
+    pub along_m: f64,
+    /// Distance of the sensor from the face, m (positive in the room).
+    pub distance_m: f64,
+    /// Height of the sensor above the floor, m.
+    pub height_m: f64,
+    /// The fan's horizontal direction as (toward the wall, along the
+    /// wall) components: `(1, 0)` looks straight at it.
+    pub direction: Vector2<f64>,
+}
+
+/// A window in a wall: its edges along the wall and its sill and head.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Window {
+    /// Left and right edges along the wall (increasing), m.
+    pub along_m: [f64; 2],
+    /// Sill and head heights, m.
+    pub sill_head_m: [f64; 2],
+    /// Passes (tracks) fused into it.
+    pub observations: usize,
+}
+
+impl Window {
+    /// Width, m.
+    pub fn width_m(&self) -> f64 {
+        self.along_m[1] - self.along_m[0]
+    }
+
+    /// Height, m.
+    pub fn height_m(&self) -> f64 {
+        self.sill_head_m[1] - self.sill_head_m[0]
+    }
+}
+
+/// One profile's gap: where along the wall, and from which height to which.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Gap {
+    along_m: f64,
+    z: [f64; 2],
+}
+
+/// A window being followed from profile to profile.
+#[derive(Clone, Debug)]
+struct Track {
+    /// Where the last profile on the wall before it was, if any.
+    before_m: Option<f64>,
+    gaps: Vec<Gap>,
+    /// Profiles since the last gap.
+    missed: usize,
+}
+
+/// Finds windows in one wall from the profiles of a pass along it.
+#[derive(Clone, Debug, Default)]
+pub struct WindowFinder {
+    config: WindowConfig,
+    tracks: Vec<Track>,
+    /// The last profile seen, and whether it met the wall around the
+    /// heights of any window.
+    last_along_m: Option<f64>,
+    found: Vec<Window>,
+}
+
+impl WindowFinder {
+    /// A finder with `config`.
+    pub fn new(config: WindowConfig) -> Self {
+        WindowFinder {
+            config,
+            ..WindowFinder::default()
+        }
+    }
+
+    /// Takes one profile shot from `pose`.
+    pub fn add(&mut self, profile: &RangeProfile, pose: &ProfilePose) {
+        let cfg = self.config.clone();
+        let cfg = &cfg;
+        let c = pose.direction.x;
+        if c < cfg.min_incidence_cos || pose.distance_m <= 0.0 {
+            return;
+        }
+        // Horizontal distance to the face along the fan, and where along
+        // the wall the fan meets it.
+        let to_face = pose.distance_m / c;
+        let along = pose.along_m + pose.direction.y * to_face;
+        let gaps = gaps_in(profile, pose, to_face, cfg);
+        // Continue the tracks whose heights a gap overlaps; start new ones.
+        let mut used = vec![false; gaps.len()];
+        for t in &mut self.tracks {
+            let Some(last) = t.gaps.last().copied() else {
+                continue;
+            };
+            match gaps
+                .iter()
+                .enumerate()
+                .find(|(i, g)| !used[*i] && g.z[0] < last.z[1] && last.z[0] < g.z[1])
+            {
+                Some((i, g)) => {
+                    used[i] = true;
+                    t.gaps.push(*g);
+                    t.missed = 0;
+                }
+                None => t.missed += 1,
+            }
+        }
+        for (g, _) in gaps.iter().zip(&used).filter(|(_, u)| !**u) {
+            self.tracks.push(Track {
+                before_m: self.last_along_m,
+                gaps: vec![*g],
+                missed: 0,
+            });
+        }
+        // A track missed by this profile ends at it.
+        let (done, open): (Vec<_>, Vec<_>) = std::mem::take(&mut self.tracks)
+            .into_iter()
+            .partition(|t| t.missed > 0);
+        self.tracks = open;
+        for t in done {
+            if let Some(w) = close(&t, Some(along), cfg) {
+                self.fuse(w);
+            }
+        }
+        self.last_along_m = Some(along);
+    }
+
+    /// Ends the pass: tracks still open have no far edge and are dropped
+    /// (the window was not seen whole).
+    pub fn end_pass(&mut self) {
+        self.tracks.clear();
+        self.last_along_m = None;
+    }
+
+    /// The windows found so far.
+    pub fn windows(&self) -> &[Window] {
+        &self.found
+    }
+
+    /// Adds `w`, averaged with a window found before in the same place.
+    fn fuse(&mut self, w: Window) {
+        let same = self.found.iter_mut().find(|f| {
+            f.along_m[0] < w.along_m[1]
+                && w.along_m[0] < f.along_m[1]
+                && f.sill_head_m[0] < w.sill_head_m[1]
+                && w.sill_head_m[0] < f.sill_head_m[1]
+        });
+        match same {
+            Some(f) => {
+                let (n, m) = (f.observations as f64, w.observations as f64);
+                let mix = |a: f64, b: f64| (a * n + b * m) / (n + m);
+                f.along_m = [
+                    mix(f.along_m[0], w.along_m[0]),
+                    mix(f.along_m[1], w.along_m[1]),
+                ];
+                f.sill_head_m = [
+                    mix(f.sill_head_m[0], w.sill_head_m[0]),
+                    mix(f.sill_head_m[1], w.sill_head_m[1]),
+                ];
+                f.observations += w.observations;
+            }
+            None => self.found.push(w),
+        }
+    }
+}
+
+/// The window of a finished track: edges halfway between the profiles on
+/// either side of it, sill and head the medians of its gaps'.
+fn close(t: &Track, after_m: Option<f64>, cfg: &WindowConfig) -> Option<Window> {
+    let (first, last) = (t.gaps.first()?, t.gaps.last()?);
+    let before = t.before_m?;
+    let after = after_m?;
+    let a = 0.5 * (before + first.along_m);
+    let b = 0.5 * (last.along_m + after);
+    let (lo, hi) = (a.min(b), a.max(b));
+    let median = |f: &dyn Fn(&Gap) -> f64| {
+        let mut v: Vec<f64> = t.gaps.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let w = Window {
+        along_m: [lo, hi],
+        sill_head_m: [median(&|g| g.z[0]), median(&|g| g.z[1])],
+        observations: 1,
+    };
+    (w.width_m() >= cfg.min_size_m && w.height_m() >= cfg.min_size_m).then_some(w)
+}
+
+/// The gaps of one profile: runs of rays through the face, each bounded
+/// by rays on it.
+fn gaps_in(
+    profile: &RangeProfile,
+    pose: &ProfilePose,
+    to_face: f64,
+    cfg: &WindowConfig,
+) -> Vec<Gap> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum Ray {
+        Face,
+        Through,
+        Front,
+    }
+    let c = pose.direction.x;
+    let mut kinds = Vec::with_capacity(profile.ranges_m.len());
+    let mut face_z = Vec::with_capacity(profile.ranges_m.len());
+    let mut hit_z = Vec::with_capacity(profile.ranges_m.len());
+    for (&e, &r) in profile.elevations_rad.iter().zip(&profile.ranges_m) {
+        let (s, cos_e) = e.sin_cos();
+        // Height where the ray passes the face.
+        let zf = if cos_e > 1e-6 {
+            pose.height_m + to_face * s / cos_e
+        } else {
+            f64::INFINITY
+        };
+        face_z.push(zf);
+        // Depth of the echo behind the face (along the wall's normal).
+        let depth = if r.is_finite() {
+            (r * cos_e - to_face) * c
+        } else {
+            f64::INFINITY
+        };
+        hit_z.push(if r.is_finite() {
+            pose.height_m + r * s
+        } else {
+            f64::NAN
+        });
+        kinds.push(if depth.abs() <= cfg.face_tolerance_m {
+            Ray::Face
+        } else if depth < 0.0 {
+            Ray::Front
+        } else {
+            Ray::Through
+        });
+    }
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < kinds.len() {
+        if kinds[i] != Ray::Through {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < kinds.len() && kinds[i] == Ray::Through {
+            i += 1;
+        }
+        // Bounded by the face on both sides, or no edge is known.
+        if start == 0 || i >= kinds.len() || kinds[start - 1] != Ray::Face || kinds[i] != Ray::Face
+        {
+            continue;
+        }
+        // Each edge lies between its face ray and its first through ray.
+        // Rays that pass the face just inside the hole go on to meet the
+        // sill's top or the lintel's underside within the wall's thickness:
+        // two of them echoing at one height (a horizontal surface, not the
+        // glass of a glazed window, which echoes at one depth) mark the
+        // edge exactly.
+        let reveal = |k: usize| {
+            let d = (profile.ranges_m[k] * profile.elevations_rad[k].cos() - to_face) * c;
+            d > cfg.face_tolerance_m && d <= cfg.reveal_depth_m
+        };
+        let edge = |face: usize, through: usize, next: Option<usize>| {
+            if let Some(n) = next
+                && reveal(through)
+                && reveal(n)
+                && (hit_z[through] - hit_z[n]).abs() <= 0.025
+            {
+                0.5 * (hit_z[through] + hit_z[n])
+            } else {
+                0.5 * (face_z[face] + face_z[through])
+            }
+        };
+        let inner = |k: usize, toward: isize| {
+            let n = k as isize + toward;
+            (n >= start as isize && n < i as isize).then_some(n as usize)
+        };
+        let z0 = edge(start - 1, start, inner(start, 1));
+        let z1 = edge(i, i - 1, inner(i - 1, -1));
+        out.push(Gap {
+            along_m: 0.0,
+            z: [z0.min(z1), z0.max(z1)],
+        });
+    }
+    let along = pose.along_m + pose.direction.y * to_face;
+    for g in &mut out {
+        g.along_m = along;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use stucco_core::Stamp;
+
+    /// A wall at x = 0 with a window `[u0, u1] × [sill, head]` in it, 0.15 m
+    /// thick; a camera at `distance` in front of it at `along`, 1 m high,
+    /// looking straight at it.
+    fn profile(along: f64, distance: f64, window: [f64; 4]) -> RangeProfile {
+        let [u0, u1, sill, head] = window;
+        let elevations: Vec<f64> = (0..96).map(|i| -0.6 + 2.17 * i as f64 / 95.0).collect();
+        let ranges = elevations
+            .iter()
+            .map(|&e| {
+                let (s, c) = e.sin_cos();
+                if c < 1e-9 {
+                    return f64::INFINITY;
+                }
+                let r_face = distance / c;
+                let z = 1.0 + r_face * s;
+                let inside = (u0..=u1).contains(&along) && z > sill && z < head;
+                if !inside {
+                    return r_face;
+                }
+                // Through the hole: the sill's top or the lintel's underside
+                // within the wall's thickness, else nothing.
+                let plane = if s < 0.0 { sill } else { head };
+                let r_plane = (plane - 1.0) / s;
+                if s.abs() > 1e-9 && r_plane * c <= distance + 0.15 {
+                    r_plane
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect();
+        RangeProfile {
+            stamp: Stamp::ZERO,
+            sensor: "cam".into(),
+            azimuth_rad: 0.0,
+            elevations_rad: elevations,
+            ranges_m: ranges,
+        }
+    }
+
+    fn pose(along: f64, distance: f64) -> ProfilePose {
+        ProfilePose {
+            along_m: along,
+            distance_m: distance,
+            height_m: 1.0,
+            direction: Vector2::new(1.0, 0.0),
+        }
+    }
+
+    #[test]
+    fn a_window_is_found_with_its_edges_within_a_profile_step() {
+        let window = [1.83, 3.21, 0.9, 2.1];
+        let mut f = WindowFinder::new(WindowConfig::default());
+        let step = 0.02;
+        for k in 0..250 {
+            let u = 0.5 + step * k as f64;
+            f.add(&profile(u, 0.6, window), &pose(u, 0.6));
+        }
+        let w = f.windows();
+        assert_eq!(w.len(), 1, "{w:?}");
+        let w = w[0];
+        assert!(
+            (w.along_m[0] - window[0]).abs() <= step / 2.0 + 1e-9,
+            "{w:?}"
+        );
+        assert!(
+            (w.along_m[1] - window[1]).abs() <= step / 2.0 + 1e-9,
+            "{w:?}"
+        );
+        // The head where two rays met the lintel's underside: exact (the
+        // rays are 5.8 cm apart there). Fewer rays reach the sill's top
+        // (the shallow rays meet it deep in the wall): within half their
+        // spacing, 1.4 cm.
+        assert!((w.sill_head_m[1] - 2.1).abs() < 1e-9, "{w:?}");
+        assert!((w.sill_head_m[0] - 0.9).abs() <= 0.007, "{w:?}");
+    }
+
+    #[test]
+    fn small_holes_and_half_seen_windows_are_not_reported() {
+        let mut f = WindowFinder::new(WindowConfig::default());
+        for k in 0..100 {
+            let u = 0.5 + 0.02 * k as f64;
+            f.add(&profile(u, 0.6, [1.0, 1.3, 1.0, 1.5]), &pose(u, 0.6));
+        }
+        assert!(f.windows().is_empty(), "{:?}", f.windows());
+        // A pass that ends inside a window: not seen whole.
+        let mut f = WindowFinder::new(WindowConfig::default());
+        for k in 0..60 {
+            let u = 0.5 + 0.02 * k as f64;
+            f.add(&profile(u, 0.6, [1.0, 2.5, 1.0, 1.9]), &pose(u, 0.6));
+        }
+        f.end_pass();
+        assert!(f.windows().is_empty());
+    }
+
+    #[test]
+    fn two_passes_are_fused() {
+        let window = [1.0, 2.0, 0.8, 1.9];
+        let mut f = WindowFinder::new(WindowConfig::default());
+        for pass in 0..2 {
+            for k in 0..80 {
+                let u = if pass == 0 {
+                    0.4 + 0.025 * k as f64
+                } else {
+                    2.4 - 0.025 * k as f64
+                };
+                f.add(&profile(u, 0.7, window), &pose(u, 0.7));
+            }
+            f.end_pass();
+        }
+        let w = f.windows();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].observations, 2);
+        assert!(
+            (w[0].along_m[0] - 1.0).abs() < 0.0125 + 1e-9
+                && (w[0].along_m[1] - 2.0).abs() < 0.0125 + 1e-9
+        );
+    }
+}
