@@ -25,7 +25,7 @@ use std::collections::BTreeMap;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 use stucco_control::GainSchedule;
-use stucco_core::{DriveCommand, Pose2, Stamp};
+use stucco_core::{DriveCommand, Pose2, Stamp, Telecommand};
 use stucco_mission::{
     Estimate, Event, Executive, ExecutiveConfig, Inputs, OperatorCommand, Progress,
 };
@@ -54,6 +54,7 @@ struct RecordedInputs {
     bumper: bool,
     estop: bool,
     operator: Vec<OperatorCommand>,
+    telecommands: Vec<Telecommand>,
     /// The `/scan/points` message in force.
     scan: u64,
 }
@@ -176,6 +177,7 @@ impl<W: Write + Seek> Recorder<W> {
                 bumper: inputs.bumper,
                 estop: inputs.estop,
                 operator: inputs.operator.to_vec(),
+                telecommands: inputs.telecommands.to_vec(),
                 scan,
             },
         )?;
@@ -275,6 +277,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                         bumper: i.bumper,
                         estop: i.estop,
                         operator: &i.operator,
+                        telecommands: &i.telecommands,
                     },
                 );
                 replayed = out.drive;

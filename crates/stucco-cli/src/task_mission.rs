@@ -565,6 +565,7 @@ fn run_once(
             bumper,
             estop: false,
             operator: &[],
+            telecommands: &[],
         };
         let out_ = exec.tick(now, &inputs);
         if let Some(r) = recorder.as_mut() {

@@ -11,6 +11,9 @@
 //! - [`Platform`]: the port to a robot or the simulator — [`DriveCommand`]
 //!   in, [`Readings`] ([`EncoderSample`], [`Scan`], [`RangeProfile`],
 //!   bumper) out, time advanced by the caller.
+//! - [`Telecommand`], [`Command`], [`Ack`], [`Reply`]: the operator's
+//!   semiautonomous vocabulary and the robot's replies; [`WallName`],
+//!   [`Side`]: the walls of a room as commands name them.
 //!
 //! ```
 //! use stucco_core::{LaserSpec, Pose2, Scan, Stamp};
@@ -25,6 +28,7 @@
 #![warn(missing_docs)]
 
 mod laser;
+mod operator;
 mod platform;
 mod pose;
 mod scan;
@@ -33,6 +37,7 @@ mod text;
 mod vehicle;
 
 pub use laser::{BeamWidth, LaserSpec};
+pub use operator::{Ack, Command, Reply, Side, Telecommand, WallName};
 pub use platform::{DriveCommand, EncoderSample, Platform, RangeProfile, Readings};
 pub use pose::{Pose2, Twist2, wrap_angle};
 pub use scan::{Beam, Scan};

@@ -8,9 +8,9 @@ use crate::supervisor::{Hazard, LostPolicy, SafetyConfig, Supervisor};
 use crate::task::{OnTimeout, TaskSpec, WallName};
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use stucco_control::GainSchedule;
-use stucco_core::{DriveCommand, Pose2, Stamp, VehicleSpec};
+use stucco_core::{Ack, Command, DriveCommand, Pose2, Reply, Stamp, Telecommand, VehicleSpec};
 
 /// Run-in along the wall before a pass starts, m: the line law's distance
 /// to settle on the standoff from where the robot could turn (the offset
@@ -197,6 +197,8 @@ pub struct Inputs<'a> {
     pub estop: bool,
     /// Operator commands that arrived since the last tick.
     pub operator: &'a [OperatorCommand],
+    /// Telecommands that arrived since the last tick.
+    pub telecommands: &'a [Telecommand],
 }
 
 /// What the executive hands back each tick.
@@ -210,6 +212,8 @@ pub struct Outputs {
     pub events: Vec<Event>,
     /// A unit of work completed: the progress should be written now.
     pub checkpoint_due: bool,
+    /// Replies to telecommands.
+    pub acks: Vec<Ack>,
 }
 
 /// The executive's settings.
@@ -277,6 +281,16 @@ pub struct Executive {
     hazard: Option<Hazard>,
     lost_since: Option<Stamp>,
     continue_asked: bool,
+    /// True for the tasks of the mission file (a checkpoint keeps those),
+    /// false for the operator's.
+    scripted: Vec<bool>,
+    /// The last reply to every telecommand taken: a retry gets it again.
+    replies: BTreeMap<String, Reply>,
+    /// Operator tasks by index, and the telecommand each answers.
+    waiting: BTreeMap<usize, String>,
+    /// Direct driving until a deadline, for a telecommand.
+    jog: Option<(DriveCommand, Stamp, String)>,
+    acks: Vec<Ack>,
 }
 
 impl Executive {
@@ -296,35 +310,46 @@ impl Executive {
             hazard: None,
             lost_since: None,
             continue_asked: false,
+            scripted: vec![true; n],
+            replies: BTreeMap::new(),
+            waiting: BTreeMap::new(),
+            jog: None,
+            acks: Vec::new(),
         }
     }
 
     /// Takes up the progress of a checkpoint: tasks done, skipped or
     /// failed stay so; a task that was under way starts again.
     pub fn resume_from(&mut self, progress: &Progress) -> Result<(), ProgressMismatch> {
-        let names: Vec<&str> = self.tasks.iter().map(TaskSpec::name).collect();
+        let mine: Vec<usize> = (0..self.tasks.len())
+            .filter(|&i| self.scripted[i])
+            .collect();
+        let names: Vec<&str> = mine.iter().map(|&i| self.tasks[i].name()).collect();
         if progress.tasks != names || progress.status.len() != names.len() {
             return Err(ProgressMismatch(format!(
                 "the checkpoint holds tasks {:?}, the mission {:?}",
                 progress.tasks, names
             )));
         }
-        self.status = progress
-            .status
-            .iter()
-            .map(|s| match s {
+        for (&i, s) in mine.iter().zip(&progress.status) {
+            self.status[i] = match s {
                 TaskStatus::Active => TaskStatus::Pending,
                 other => other.clone(),
-            })
-            .collect();
+            };
+        }
         Ok(())
     }
 
-    /// The progress to keep in a checkpoint.
+    /// The progress to keep in a checkpoint: the mission file's tasks (the
+    /// operator's die with the run).
     pub fn progress(&self) -> Progress {
+        let mine = (0..self.tasks.len()).filter(|&i| self.scripted[i]);
         Progress {
-            tasks: self.tasks.iter().map(|t| t.name().to_owned()).collect(),
-            status: self.status.clone(),
+            tasks: mine
+                .clone()
+                .map(|i| self.tasks[i].name().to_owned())
+                .collect(),
+            status: mine.map(|i| self.status[i].clone()).collect(),
         }
     }
 
@@ -390,7 +415,10 @@ impl Executive {
             );
         }
         for &cmd in inputs.operator {
-            checkpoint_due |= self.operator(now, cmd);
+            checkpoint_due |= self.operator(now, cmd).unwrap_or(false);
+        }
+        for t in inputs.telecommands {
+            self.telecommand(now, t, inputs.estimate);
         }
         // The e-stop overrides everything, at once.
         if inputs.estop && !self.mode.is_final() && self.mode != MissionMode::EStopped {
@@ -411,8 +439,19 @@ impl Executive {
             }
         }
         let mut drive = DriveCommand::STOP;
+        if let Some((_, until, id)) = &self.jog
+            && now >= *until
+        {
+            let id = id.clone();
+            self.jog = None;
+            self.reply(now, &id, Reply::Done);
+        }
         if self.mode == MissionMode::Running {
-            let (cmd, unit_done) = self.run(now, inputs.estimate);
+            let (cmd, unit_done) = match &self.jog {
+                // Jogging holds the task where it is.
+                Some((cmd, _, _)) => (*cmd, false),
+                None => self.run(now, inputs.estimate),
+            };
             checkpoint_due |= unit_done;
             drive = self.supervise(now, cmd, inputs, dt, &mut checkpoint_due);
         }
@@ -421,69 +460,237 @@ impl Executive {
             spray: false,
             events: std::mem::take(&mut self.events),
             checkpoint_due,
+            acks: std::mem::take(&mut self.acks),
         }
     }
 
-    /// Follows an operator command; true when the progress changed.
-    fn operator(&mut self, now: Stamp, cmd: OperatorCommand) -> bool {
-        let refuse = |s: &mut Self, reason: &str| {
-            s.emit(
+    /// Follows an operator command: whether the progress changed, or why
+    /// it cannot be followed.
+    fn operator(&mut self, now: Stamp, cmd: OperatorCommand) -> Result<bool, String> {
+        let result = self.follow(now, cmd);
+        if let Err(reason) = &result {
+            self.emit(
                 now,
                 EventKind::CommandRefused {
                     command: cmd,
-                    reason: reason.to_owned(),
+                    reason: reason.clone(),
                 },
             );
-            false
-        };
+        }
+        result
+    }
+
+    fn follow(&mut self, now: Stamp, cmd: OperatorCommand) -> Result<bool, String> {
         if self.mode.is_final() {
-            return refuse(self, "the mission is over");
+            return Err("the mission is over".to_owned());
         }
         match cmd {
             OperatorCommand::Pause => {
-                if self.mode == MissionMode::Running {
-                    self.pause(now, "operator".to_owned());
-                    false
-                } else {
-                    refuse(self, "not running")
+                if self.mode != MissionMode::Running {
+                    return Err("not running".to_owned());
                 }
+                self.pause(now, "operator".to_owned());
+                Ok(false)
             }
             OperatorCommand::Resume => match self.mode {
                 MissionMode::Paused { .. } | MissionMode::EStopped => {
                     self.mode = MissionMode::Running;
                     self.emit(now, EventKind::Resumed);
-                    false
+                    Ok(false)
                 }
-                _ => refuse(self, "not paused"),
+                _ => Err("not paused".to_owned()),
             },
             OperatorCommand::Abort => {
                 if let Some(a) = self.active.take() {
                     self.status[a.index] = TaskStatus::Pending;
+                    self.answer(
+                        now,
+                        a.index,
+                        Reply::Failed {
+                            reason: "the mission was aborted".to_owned(),
+                        },
+                    );
                 }
                 self.mode = MissionMode::Aborted;
                 self.emit(now, EventKind::Aborted);
-                true
+                Ok(true)
             }
             OperatorCommand::Skip => {
                 let Some(a) = self.active.take() else {
-                    return refuse(self, "no task under way");
+                    return Err("no task under way".to_owned());
                 };
                 self.status[a.index] = TaskStatus::Skipped;
                 self.emit(now, EventKind::TaskSkipped { task: a.index });
-                true
+                self.answer(
+                    now,
+                    a.index,
+                    Reply::Failed {
+                        reason: "skipped".to_owned(),
+                    },
+                );
+                Ok(true)
             }
             OperatorCommand::Continue => {
                 let waiting = self.active.as_ref().is_some_and(|a| {
                     matches!(self.tasks[a.index], TaskSpec::WaitForOperator { .. })
                 });
-                if waiting {
-                    self.continue_asked = true;
-                    false
-                } else {
-                    refuse(self, "no task is waiting for the operator")
+                if !waiting {
+                    return Err("no task is waiting for the operator".to_owned());
                 }
+                self.continue_asked = true;
+                Ok(false)
             }
         }
+    }
+
+    /// Sends `reply` to telecommand `id` (and keeps it for retries).
+    fn reply(&mut self, now: Stamp, id: &str, reply: Reply) {
+        self.replies.insert(id.to_owned(), reply.clone());
+        self.acks.push(Ack {
+            id: id.to_owned(),
+            stamp: now,
+            reply,
+        });
+    }
+
+    /// Answers the telecommand behind operator task `index`, if any.
+    fn answer(&mut self, now: Stamp, index: usize, reply: Reply) {
+        if let Some(id) = self.waiting.remove(&index) {
+            self.reply(now, &id, reply);
+        }
+    }
+
+    /// Takes a telecommand: a retry gets the last reply again and is not
+    /// carried out twice; a stale one is refused; `stop` acts at once.
+    fn telecommand(&mut self, now: Stamp, t: &Telecommand, est: &Estimate) {
+        if let Some(last) = self.replies.get(&t.id).cloned() {
+            self.acks.push(Ack {
+                id: t.id.clone(),
+                stamp: now,
+                reply: last,
+            });
+            return;
+        }
+        if now > t.deadline {
+            let late = now.seconds_since(t.deadline);
+            self.reply(
+                now,
+                &t.id,
+                Reply::Rejected {
+                    reason: format!("stale: {late:.3} s past its deadline"),
+                },
+            );
+            return;
+        }
+        let follow = |s: &mut Self, cmd: OperatorCommand| match s.operator(now, cmd) {
+            Ok(_) => Reply::Done,
+            Err(reason) => Reply::Rejected { reason },
+        };
+        let reply = match &t.command {
+            Command::Stop => {
+                self.jog = None;
+                if !self.mode.is_final() && self.mode == MissionMode::Running {
+                    self.pause(now, format!("stop from {}", t.operator));
+                }
+                Reply::Done
+            }
+            Command::Status => Reply::Done,
+            Command::Pause => follow(self, OperatorCommand::Pause),
+            Command::Resume => follow(self, OperatorCommand::Resume),
+            Command::Abort => follow(self, OperatorCommand::Abort),
+            Command::Skip => follow(self, OperatorCommand::Skip),
+            Command::Continue => follow(self, OperatorCommand::Continue),
+            Command::Jog {
+                speed_mps,
+                steer_rad,
+                ttl_s,
+            } => {
+                let v = &self.config.vehicle;
+                if self.mode.is_final() {
+                    Reply::Rejected {
+                        reason: "the mission is over".to_owned(),
+                    }
+                } else if !(ttl_s.is_finite() && *ttl_s > 0.0 && *ttl_s <= 2.0) {
+                    Reply::Rejected {
+                        reason: "ttl_s: more than 0 and at most 2 s".to_owned(),
+                    }
+                } else if !(speed_mps.abs() <= v.max_speed_mps
+                    && steer_rad.abs() <= v.max_steer_rad)
+                {
+                    Reply::Rejected {
+                        reason: "speed or steering beyond the robot's limits".to_owned(),
+                    }
+                } else {
+                    // A newer jog takes over an older one.
+                    if let Some((_, _, old)) = self.jog.take() {
+                        self.reply(now, &old, Reply::Done);
+                    }
+                    let drive = DriveCommand {
+                        speed_mps: *speed_mps,
+                        steer_rad: *steer_rad,
+                    };
+                    self.jog = Some((drive, now.offset_secs(*ttl_s), t.id.clone()));
+                    Reply::Accepted
+                }
+            }
+            task => match TaskSpec::from_command(task) {
+                None => Reply::Rejected {
+                    reason: "not a task".to_owned(),
+                },
+                Some(spec) => self.accept_task(t, spec, est),
+            },
+        };
+        self.reply(now, &t.id, reply);
+    }
+
+    /// Queues an operator's task to run next, or says why it cannot run.
+    fn accept_task(&mut self, t: &Telecommand, spec: TaskSpec, est: &Estimate) -> Reply {
+        if matches!(self.mode, MissionMode::Failed { .. } | MissionMode::Aborted) {
+            return Reply::Rejected {
+                reason: "the mission is over".to_owned(),
+            };
+        }
+        if let Some((key, why)) = spec.invalid() {
+            return Reply::Rejected {
+                reason: format!("{key}: {why}"),
+            };
+        }
+        if let TaskSpec::PassDoor { door, .. } = spec
+            && door >= est.doors.len()
+        {
+            return Reply::Rejected {
+                reason: format!("door {door} is not known ({} found)", est.doors.len()),
+            };
+        }
+        // Next after the task under way; a task waiting for the operator
+        // has its answer.
+        let at = match &self.active {
+            Some(a) => {
+                if matches!(self.tasks[a.index], TaskSpec::WaitForOperator { .. }) {
+                    self.continue_asked = true;
+                }
+                a.index + 1
+            }
+            None => self
+                .status
+                .iter()
+                .position(|s| *s == TaskStatus::Pending)
+                .unwrap_or(self.tasks.len()),
+        };
+        self.tasks.insert(at, spec);
+        self.status.insert(at, TaskStatus::Pending);
+        self.scripted.insert(at, false);
+        self.waiting = std::mem::take(&mut self.waiting)
+            .into_iter()
+            .map(|(i, id)| (if i >= at { i + 1 } else { i }, id))
+            .collect();
+        self.waiting.insert(at, t.id.clone());
+        // Work done so far does not end the robot's day: a new task
+        // reopens the mission.
+        if self.mode == MissionMode::Done {
+            self.mode = MissionMode::Running;
+        }
+        Reply::Accepted
     }
 
     fn pause(&mut self, now: Stamp, reason: String) {
@@ -498,6 +705,13 @@ impl Executive {
             self.status[a.index] = TaskStatus::Failed {
                 reason: reason.clone(),
             };
+            self.answer(
+                now,
+                a.index,
+                Reply::Failed {
+                    reason: reason.clone(),
+                },
+            );
             self.emit(
                 now,
                 EventKind::TaskFailed {
@@ -612,6 +826,7 @@ impl Executive {
                     if let Some(a) = self.active.take() {
                         self.status[a.index] = TaskStatus::Done;
                         self.emit(now, EventKind::TaskDone { task: a.index });
+                        self.answer(now, a.index, Reply::Done);
                     }
                     ended = true;
                 }

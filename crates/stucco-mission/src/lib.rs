@@ -13,6 +13,13 @@
 //!   `stucco-control`, reused by every task that needs it;
 //! - control law: the command.
 //!
+//! Telecommands (`stucco_core::Telecommand`) come in with the inputs and
+//! are answered in the outputs: a task command is queued to run next and
+//! replied `accepted`, then `done` or `failed`; `stop` acts in the same
+//! tick; a `jog` drives directly until its time to live; a retried id gets
+//! its last reply again and is never carried out twice; a stale one is
+//! refused.
+//!
 //! The [`Supervisor`] sees every command last and may stop it: an obstacle
 //! in the protective field, the estimate lost, a bumper, the e-stop.
 //! [`Progress`] is what a checkpoint keeps, so a mission started again

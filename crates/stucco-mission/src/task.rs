@@ -2,60 +2,7 @@
 //! (`[[task]]` tables with `task = "follow_wall"` and the task's fields).
 
 use serde::{Deserialize, Serialize};
-
-/// A wall of the current room, by the side of the room it closes.
-///
-/// The room frame has its origin in the room's south-west corner, x east
-/// and y north, as the room filter keeps it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum WallName {
-    /// `x = 0`.
-    West,
-    /// `y = 0`.
-    South,
-    /// `x = xs`.
-    East,
-    /// `y = ys`.
-    North,
-}
-
-impl WallName {
-    /// The four walls, in the room filter's order.
-    pub const ALL: [WallName; 4] = [
-        WallName::West,
-        WallName::South,
-        WallName::East,
-        WallName::North,
-    ];
-
-    /// The room filter's index of the wall (0: x = 0, 1: y = 0, 2: x = xs,
-    /// 3: y = ys).
-    pub fn index(self) -> usize {
-        match self {
-            WallName::West => 0,
-            WallName::South => 1,
-            WallName::East => 2,
-            WallName::North => 3,
-        }
-    }
-
-    /// The wall of filter index `i`.
-    pub fn from_index(i: usize) -> Option<WallName> {
-        WallName::ALL.get(i).copied()
-    }
-}
-
-/// Which side of the robot a wall is on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Side {
-    /// On the robot's left.
-    #[default]
-    Left,
-    /// On its right.
-    Right,
-}
+pub use stucco_core::{Side, WallName};
 
 /// What a [`TaskSpec::WaitForOperator`] does when nobody answers in time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -225,6 +172,64 @@ pub enum TaskSpec {
 }
 
 impl TaskSpec {
+    /// The task a telecommand asks for, with the defaults a mission file
+    /// would give it; `None` for commands that are not tasks.
+    pub fn from_command(c: &stucco_core::Command) -> Option<TaskSpec> {
+        use stucco_core::Command as C;
+        Some(match *c {
+            C::MapRoom => TaskSpec::MapRoom {
+                path: None,
+                walls: all_walls(),
+                min_sightings: sightings(),
+                inset_m: survey_inset(),
+                speed_mps: survey_speed(),
+                max_size_sigma_m: size_sigma(),
+                timeout_s: map_timeout(),
+            },
+            C::PassDoor { door } => TaskSpec::PassDoor {
+                door,
+                approach_m: approach(),
+                beyond_m: beyond(),
+                speed_mps: drive_speed(),
+            },
+            C::FollowWall {
+                wall,
+                standoff_m,
+                from_m,
+                to_m,
+            } => TaskSpec::FollowWall {
+                wall,
+                standoff_m,
+                from_m,
+                to_m,
+                speed_mps: follow_speed(),
+            },
+            C::MoveRelative {
+                dx_m,
+                dy_m,
+                dtheta_deg,
+            } => TaskSpec::MoveRelative {
+                dx_m,
+                dy_m,
+                dtheta_deg,
+                speed_mps: drive_speed(),
+            },
+            C::AlignToWall {
+                wall,
+                standoff_m,
+                at_m,
+                side,
+            } => TaskSpec::AlignToWall {
+                wall,
+                standoff_m,
+                at_m,
+                side,
+                speed_mps: drive_speed(),
+            },
+            _ => return None,
+        })
+    }
+
     /// The task's name as the mission file writes it.
     pub fn name(&self) -> &'static str {
         match self {

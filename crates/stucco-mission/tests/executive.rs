@@ -5,8 +5,11 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use nalgebra::Point2;
+use std::collections::BTreeMap;
 use stucco_control::{GainSchedule, Limiter};
-use stucco_core::{DriveCommand, Pose2, Stamp, Twist2, VehicleSpec, wrap_angle};
+use stucco_core::{
+    Ack, Command, DriveCommand, Pose2, Reply, Stamp, Telecommand, Twist2, VehicleSpec, wrap_angle,
+};
 use stucco_mission::*;
 
 const DT: f64 = 0.02;
@@ -89,6 +92,7 @@ fn run(
                 bumper: false,
                 estop: false,
                 operator: &ops,
+                telecommands: &[],
             },
         );
         events.extend(out.events);
@@ -164,6 +168,7 @@ fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
                 bumper: false,
                 estop: false,
                 operator: &[],
+                telecommands: &[],
             },
         );
         // The pass proper: from `from_m` on, the standoff holds.
@@ -399,6 +404,7 @@ fn an_obstacle_stops_the_robot_and_a_lasting_one_fails_the_task() {
                 bumper: false,
                 estop: false,
                 operator: &[],
+                telecommands: &[],
             },
         );
         if exec.hazard() == Some(Hazard::Obstacle) && stopped_at.is_none() {
@@ -451,6 +457,7 @@ fn the_estop_stops_at_once_and_waits_for_release_and_resume() {
                 bumper: false,
                 estop,
                 operator: &ops,
+                telecommands: &[],
             },
         );
         if estop {
@@ -481,6 +488,7 @@ fn the_estop_stops_at_once_and_waits_for_release_and_resume() {
             bumper: false,
             estop: true,
             operator: &[],
+            telecommands: &[],
         },
     );
     robot.drive(out.drive);
@@ -518,6 +526,7 @@ fn map_room_drives_loops_until_the_room_is_known() {
                 bumper: false,
                 estop: false,
                 operator: &[],
+                telecommands: &[],
             },
         );
         loops_seen += out
@@ -537,4 +546,319 @@ fn map_room_drives_loops_until_the_room_is_known() {
     }
     assert_eq!(exec.mode(), &MissionMode::Done);
     assert!(loops_seen >= 2, "{loops_seen} loops");
+}
+
+// ---- Telecommands --------------------------------------------------------
+
+fn command(id: &str, at: Stamp, command: Command) -> Telecommand {
+    Telecommand {
+        id: id.to_owned(),
+        operator: "ann".to_owned(),
+        issued: at,
+        deadline: at.offset_secs(10.0),
+        command,
+    }
+}
+
+/// One tick with `telecommands`; the outputs.
+fn tick_with(exec: &mut Executive, robot: &mut Robot, telecommands: &[Telecommand]) -> Outputs {
+    let est = robot.estimate();
+    let out = exec.tick(
+        robot.now,
+        &Inputs {
+            estimate: &est,
+            obstacles: &[],
+            bumper: false,
+            estop: false,
+            operator: &[],
+            telecommands,
+        },
+    );
+    robot.drive(out.drive);
+    out
+}
+
+/// A robot with nothing scripted, waiting for its operator.
+fn standing_by() -> Executive {
+    executive(
+        vec![TaskSpec::WaitForOperator {
+            prompt: "standing by".to_owned(),
+            timeout_s: None,
+            on_timeout: OnTimeout::Fail,
+        }],
+        false,
+    )
+}
+
+#[test]
+fn a_task_from_the_operator_is_accepted_then_done() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = standing_by();
+    // The robot is standing by when the command comes.
+    tick_with(&mut exec, &mut robot, &[]);
+    let mv = command(
+        "m1",
+        Stamp::ZERO,
+        Command::MoveRelative {
+            dx_m: 0.8,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+        },
+    );
+    let first = tick_with(&mut exec, &mut robot, &[mv]);
+    assert_eq!(first.acks.len(), 1);
+    assert_eq!(first.acks[0].reply, Reply::Accepted);
+    let mut done = None;
+    for _ in 0..(30.0 / DT) as usize {
+        let out = tick_with(&mut exec, &mut robot, &[]);
+        if let Some(a) = out.acks.iter().find(|a| a.id == "m1") {
+            done = Some(a.reply.clone());
+            break;
+        }
+    }
+    assert_eq!(done, Some(Reply::Done));
+    assert!((robot.pose.x - 2.3).abs() < 0.02, "{:?}", robot.pose);
+    // The operator's answer also ended the wait: the mission is done.
+    tick_with(&mut exec, &mut robot, &[]);
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    // The checkpoint keeps the mission file's task only.
+    assert_eq!(exec.progress().tasks, ["wait_for_operator"]);
+}
+
+#[test]
+fn retries_are_answered_but_carried_out_once_and_stale_or_impossible_commands_refused() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = standing_by();
+    let mv = command(
+        "m1",
+        Stamp::ZERO,
+        Command::MoveRelative {
+            dx_m: 0.3,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+        },
+    );
+    let mut started = 0;
+    let mut replies = Vec::new();
+    for k in 0..600 {
+        // The same command again every second.
+        let again = if k % 50 == 0 {
+            vec![mv.clone()]
+        } else {
+            Vec::new()
+        };
+        let out = tick_with(&mut exec, &mut robot, &again);
+        started += out
+            .events
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::TaskStarted { task: 1, .. }))
+            .count();
+        replies.extend(out.acks.into_iter().map(|a| a.reply));
+    }
+    assert_eq!(started, 1);
+    assert_eq!(replies.first(), Some(&Reply::Accepted));
+    assert!(replies.iter().filter(|r| **r == Reply::Done).count() >= 5);
+    assert!((robot.pose.x - 1.8).abs() < 0.02);
+    // Past its deadline.
+    let mut late = command("m2", Stamp::ZERO, Command::MapRoom);
+    late.deadline = Stamp::from_secs_f64(1.0);
+    let out = tick_with(&mut exec, &mut robot, &[late]);
+    assert!(matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains("stale")));
+    // A door the robot does not know.
+    let at = robot.now;
+    let out = tick_with(
+        &mut exec,
+        &mut robot,
+        &[command("m3", at, Command::PassDoor { door: 2 })],
+    );
+    assert!(
+        matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains("not known")),
+        "{:?}",
+        out.acks
+    );
+}
+
+#[test]
+fn stop_acts_in_the_same_tick_and_a_jog_ends_at_its_time_to_live() {
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(
+        vec![TaskSpec::MoveRelative {
+            dx_m: 2.0,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+            speed_mps: 0.3,
+        }],
+        false,
+    );
+    for _ in 0..100 {
+        tick_with(&mut exec, &mut robot, &[]);
+    }
+    let at = robot.now;
+    let out = tick_with(&mut exec, &mut robot, &[command("s", at, Command::Stop)]);
+    assert_eq!(out.drive, DriveCommand::STOP);
+    assert_eq!(out.acks[0].reply, Reply::Done);
+    assert!(matches!(exec.mode(), MissionMode::Paused { .. }));
+    // A jog while stopped is taken, but the robot stays stopped until
+    // resumed; resumed, the jog drives, then stops at its time to live.
+    let jog = command(
+        "j",
+        robot.now,
+        Command::Jog {
+            speed_mps: 0.2,
+            steer_rad: 0.0,
+            ttl_s: 0.5,
+        },
+    );
+    let resume = command("r", robot.now, Command::Resume);
+    let t0 = robot.now;
+    let out = tick_with(&mut exec, &mut robot, &[resume, jog]);
+    assert_eq!(out.drive.speed_mps, 0.2);
+    let mut last_drive = t0;
+    let mut done_at = None;
+    for _ in 0..100 {
+        let out = tick_with(&mut exec, &mut robot, &[]);
+        if out.drive.speed_mps == 0.2 {
+            last_drive = robot.now;
+        }
+        if out
+            .acks
+            .iter()
+            .any(|a| a.id == "j" && a.reply == Reply::Done)
+        {
+            done_at = Some(robot.now);
+            break;
+        }
+    }
+    let done_at = done_at.expect("the jog ended");
+    // The last jog command went out before the time to live ran out, and
+    // the one after it was not a jog.
+    assert!(last_drive.seconds_since(t0) <= 0.5 + 1e-9);
+    assert!(done_at.seconds_since(t0) <= 0.5 + DT + 1e-9);
+}
+
+/// A channel that delays (up to 1 s), drops (20%), duplicates and
+/// reorders messages, both ways.
+struct Lossy {
+    rng: rand_chacha::ChaCha8Rng,
+    queue: Vec<(Stamp, Telecommand)>,
+    back: Vec<(Stamp, Ack)>,
+}
+
+impl Lossy {
+    fn delay(&mut self) -> f64 {
+        use rand::RngExt;
+        self.rng.random_range(0.0..1.0)
+    }
+    fn send(&mut self, now: Stamp, t: &Telecommand) {
+        use rand::RngExt;
+        for _ in 0..if self.rng.random_bool(0.1) { 2 } else { 1 } {
+            if !self.rng.random_bool(0.2) {
+                let d = self.delay();
+                self.queue.push((now.offset_secs(d), t.clone()));
+            }
+        }
+    }
+    fn answer(&mut self, now: Stamp, a: Ack) {
+        use rand::RngExt;
+        if !self.rng.random_bool(0.2) {
+            let d = self.delay();
+            self.back.push((now.offset_secs(d), a));
+        }
+    }
+    fn due<T>(list: &mut Vec<(Stamp, T)>, now: Stamp) -> Vec<T> {
+        let (due, rest): (Vec<_>, Vec<_>) = std::mem::take(list)
+            .into_iter()
+            .partition(|(t, _)| *t <= now);
+        *list = rest;
+        due.into_iter().map(|(_, x)| x).collect()
+    }
+}
+
+/// Under 1 s of delay, 20% loss, duplication and reordering, with the
+/// operator retrying every 0.5 s until answered, every command is carried
+/// out exactly once or refused with a reason.
+#[test]
+fn over_a_lossy_link_every_command_is_carried_out_once_or_refused() {
+    use rand::SeedableRng;
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = standing_by();
+    let mut link = Lossy {
+        rng: rand_chacha::ChaCha8Rng::seed_from_u64(5),
+        queue: Vec::new(),
+        back: Vec::new(),
+    };
+    // Four moves forward, a status query, one stale command, one move the
+    // room has no space for (refused by its own checks: a turn too near).
+    let moves: Vec<Telecommand> = (0..4)
+        .map(|i| {
+            command(
+                &format!("move-{i}"),
+                Stamp::from_secs_f64(i as f64 * 8.0),
+                Command::MoveRelative {
+                    dx_m: 0.4,
+                    dy_m: 0.0,
+                    dtheta_deg: 0.0,
+                },
+            )
+        })
+        .collect();
+    let mut plan: Vec<Telecommand> = moves.clone();
+    plan.push(command(
+        "status",
+        Stamp::from_secs_f64(3.0),
+        Command::Status,
+    ));
+    let mut stale = command("stale", Stamp::from_secs_f64(4.0), Command::MapRoom);
+    stale.deadline = Stamp::from_secs_f64(4.1);
+    plan.push(stale);
+    let mut answered: BTreeMap<String, Reply> = BTreeMap::new();
+    let mut final_replies: BTreeMap<String, Reply> = BTreeMap::new();
+    let mut last_sent: BTreeMap<String, Stamp> = BTreeMap::new();
+    let mut started = 0;
+    for _ in 0..(90.0 / DT) as usize {
+        let now = robot.now;
+        // The operator sends what is due and retries what is unanswered.
+        for t in &plan {
+            let due = now >= t.issued && !answered.contains_key(&t.id);
+            let retry = last_sent
+                .get(&t.id)
+                .is_none_or(|s| now.seconds_since(*s) >= 0.5);
+            if due && retry && now <= t.deadline {
+                link.send(now, t);
+                last_sent.insert(t.id.clone(), now);
+            }
+        }
+        let arriving = Lossy::due(&mut link.queue, now);
+        let out = tick_with(&mut exec, &mut robot, &arriving);
+        started += out
+            .events
+            .iter()
+            .filter(|e| matches!(&e.kind, EventKind::TaskStarted { name, .. } if name == "move_relative"))
+            .count();
+        for a in out.acks {
+            link.answer(now, a);
+        }
+        for a in Lossy::due(&mut link.back, now) {
+            answered.entry(a.id.clone()).or_insert(a.reply.clone());
+            if matches!(
+                a.reply,
+                Reply::Done | Reply::Failed { .. } | Reply::Rejected { .. }
+            ) {
+                final_replies.insert(a.id.clone(), a.reply);
+            }
+        }
+    }
+    // Each move ran exactly once and ended done; the robot moved 1.6 m.
+    assert_eq!(started, 4);
+    assert!((robot.pose.x - 2.6).abs() < 0.03, "{:?}", robot.pose);
+    for m in &moves {
+        assert!(answered.contains_key(&m.id), "{} never answered", m.id);
+    }
+    assert_eq!(final_replies.get("status"), Some(&Reply::Done));
+    // The stale one may have been lost every time before its deadline;
+    // if it got through, it was refused (its deadline is 0.1 s after its
+    // issue, shorter than the link's delay) or taken, never run twice.
+    if let Some(r) = final_replies.get("stale") {
+        assert!(matches!(r, Reply::Rejected { .. } | Reply::Done), "{r:?}");
+    }
 }

@@ -1,0 +1,217 @@
+//! The operator's side of the robot: the walls of a room by name, the
+//! telecommands of the semiautonomous vocabulary (each naming things the
+//! robot perceives, never bare coordinates to hit blindly), and the
+//! robot's replies.
+
+use crate::Stamp;
+use serde::{Deserialize, Serialize};
+
+/// A wall of the current room, by the side of the room it closes.
+///
+/// The room frame has its origin in the room's south-west corner, x east
+/// and y north, as the room filter keeps it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WallName {
+    /// `x = 0`.
+    West,
+    /// `y = 0`.
+    South,
+    /// `x = xs`.
+    East,
+    /// `y = ys`.
+    North,
+}
+
+impl WallName {
+    /// The four walls, in the room filter's order.
+    pub const ALL: [WallName; 4] = [
+        WallName::West,
+        WallName::South,
+        WallName::East,
+        WallName::North,
+    ];
+
+    /// The room filter's index of the wall (0: x = 0, 1: y = 0, 2: x = xs,
+    /// 3: y = ys).
+    pub fn index(self) -> usize {
+        match self {
+            WallName::West => 0,
+            WallName::South => 1,
+            WallName::East => 2,
+            WallName::North => 3,
+        }
+    }
+
+    /// The wall of filter index `i`.
+    pub fn from_index(i: usize) -> Option<WallName> {
+        WallName::ALL.get(i).copied()
+    }
+}
+
+/// Which side of the robot a wall is on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Side {
+    /// On the robot's left.
+    #[default]
+    Left,
+    /// On its right.
+    Right,
+}
+
+/// A command from the operator, with who sent it, when, and until when it
+/// may still be carried out.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Telecommand {
+    /// Its id: a command retried with the same id is carried out once.
+    pub id: String,
+    /// The operator's identity.
+    pub operator: String,
+    /// When it was issued (the operator's clock, synchronised).
+    pub issued: Stamp,
+    /// Past this it is stale and refused.
+    pub deadline: Stamp,
+    /// What to do.
+    pub command: Command,
+}
+
+/// The telecommand vocabulary (`../shared/DESIGN.md`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Command {
+    /// Map the room the robot is in.
+    MapRoom,
+    /// Drive through a door the robot knows (by its index).
+    PassDoor {
+        /// The door.
+        door: usize,
+    },
+    /// Follow a wall at a standoff between two positions along it.
+    FollowWall {
+        /// The wall.
+        wall: WallName,
+        /// Distance from the wall, m.
+        standoff_m: f64,
+        /// Where the pass starts along the wall, m.
+        from_m: f64,
+        /// Where it ends, m.
+        to_m: f64,
+    },
+    /// Move by `(dx, dy, dθ)` in the robot's frame.
+    MoveRelative {
+        /// Forward, m.
+        dx_m: f64,
+        /// To the left, m.
+        dy_m: f64,
+        /// Turn, degrees.
+        dtheta_deg: f64,
+    },
+    /// Stop parallel to a wall at a standoff.
+    AlignToWall {
+        /// The wall.
+        wall: WallName,
+        /// Distance from it, m.
+        standoff_m: f64,
+        /// Position along it, m.
+        at_m: f64,
+        /// The side it ends up on.
+        side: Side,
+    },
+    /// Stop where you are and wait.
+    Pause,
+    /// Go on.
+    Resume,
+    /// Give the mission up.
+    Abort,
+    /// Give the current task up.
+    Skip,
+    /// The answer a waiting task waits for.
+    Continue,
+    /// Stop now: the e-stop lane, never queued behind anything.
+    Stop,
+    /// Drive directly for `ttl_s`, then stop (a dead-man timeout).
+    Jog {
+        /// Front-wheel speed, m/s.
+        speed_mps: f64,
+        /// Steering angle, rad.
+        steer_rad: f64,
+        /// How long the command holds, s.
+        ttl_s: f64,
+    },
+    /// A harmless query: replied to at once.
+    Status,
+}
+
+/// The robot's reply to a telecommand.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "reply", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Reply {
+    /// Taken: it will be carried out.
+    Accepted,
+    /// Refused, and why.
+    Rejected {
+        /// Why.
+        reason: String,
+    },
+    /// Carried out.
+    Done,
+    /// Tried and failed, and why.
+    Failed {
+        /// Why.
+        reason: String,
+    },
+}
+
+/// A reply to the telecommand `id`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ack {
+    /// The command's id.
+    pub id: String,
+    /// When the robot replied.
+    pub stamp: Stamp,
+    /// The reply.
+    pub reply: Reply,
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn telecommands_read_as_json_any_client_can_write() {
+        let t: Telecommand = serde_json::from_str(
+            r#"{"id":"c7","operator":"ann","issued":0,"deadline":5000000000,
+                "command":{"type":"follow_wall","wall":"south","standoff_m":0.6,"from_m":2.0,"to_m":4.0}}"#,
+        )
+        .unwrap();
+        assert_eq!(t.deadline, Stamp::from_secs_f64(5.0));
+        assert!(matches!(
+            t.command,
+            Command::FollowWall {
+                wall: WallName::South,
+                ..
+            }
+        ));
+        let back: Telecommand = serde_json::from_str(&serde_json::to_string(&t).unwrap()).unwrap();
+        assert_eq!(back, t);
+        let bad = serde_json::from_str::<Telecommand>(
+            r#"{"id":"c8","operator":"ann","issued":0,"deadline":1,"command":{"type":"fly"}}"#,
+        );
+        assert!(bad.is_err());
+        let ack = Ack {
+            id: "c7".into(),
+            stamp: Stamp::ZERO,
+            reply: Reply::Rejected {
+                reason: "stale".into(),
+            },
+        };
+        assert_eq!(
+            serde_json::to_string(&ack).unwrap(),
+            r#"{"id":"c7","stamp":0,"reply":{"reply":"rejected","reason":"stale"}}"#
+        );
+    }
+}
