@@ -3,6 +3,7 @@
 
 mod corridor;
 mod door_passage;
+mod link;
 mod missions;
 mod walls_on_real_logs;
 

@@ -10,13 +10,18 @@
 //!   executive of `stucco-mission` in the simulator, with report, events,
 //!   map and checkpoints; [`Recorder`] and [`replay_run`] record a run as
 //!   MCAP and replay it through the executive.
+//! - [`run_robot`]: the `stucco robot` process (the executive and the
+//!   simulator paced to the wall clock, on zenoh); [`Operator`]: the
+//!   `stucco op` console.
 #![warn(missing_docs)]
 
 mod carmen;
 mod experiments;
 mod mission;
 mod navigator;
+mod op;
 mod record;
+mod robot;
 mod simbench;
 mod task_mission;
 mod walls;
@@ -25,8 +30,11 @@ pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
 pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
+pub use op::{BenchReport, CommandResult, Operator};
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
+pub use robot::{RobotJob, RobotState, run_robot};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
+pub use stucco_link::LinkConfig;
 pub use task_mission::{
     Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,
     run_task_mission, write_atomic,

@@ -6,10 +6,14 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use stucco_cli::{
     BadInput, ExtractorKind, Mission, MissionReport, MissionSummary, RunJob, SimbenchJob,
     TaskMissionJob, WallsJob, replay_run, run_mission, run_simbench, run_task_mission, run_walls,
 };
+use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
+use stucco_core::{Command as Tc, Reply, Side, WallName};
 
 /// stucco: software of an autonomous spray-plastering robot.
 #[derive(Parser)]
@@ -70,6 +74,60 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The robot process: the mission's world in the simulator paced to the
+    /// wall clock, its tasks then the operator's, commanded and watched over
+    /// zenoh under `stucco/NAME/...`.
+    Robot {
+        /// The mission file (its world, start and failsafe; its tasks).
+        mission: PathBuf,
+        /// The robot's name on the network.
+        #[arg(long)]
+        name: String,
+        /// Endpoints to listen on (e.g. `tcp/127.0.0.1:7447`).
+        #[arg(long)]
+        listen: Vec<String>,
+        /// Endpoints (peers, a router) to connect to.
+        #[arg(long)]
+        connect: Vec<String>,
+        /// A zenoh configuration file (JSON5).
+        #[arg(long)]
+        zenoh_config: Option<PathBuf>,
+        /// Simulated seconds per wall-clock second.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+        /// Stop after this many simulated seconds.
+        #[arg(long)]
+        stop_after: Option<f64>,
+    },
+    /// The operator's console: `stucco op list`, or `stucco op NAME
+    /// <command>` (a telecommand, `watch` or `bench`). Exit code: 0 done or
+    /// accepted, 1 rejected or failed, 2 bad input.
+    Op {
+        /// A robot's name, or `list`.
+        target: String,
+        /// What to do.
+        #[command(subcommand)]
+        action: Option<OpAction>,
+        /// Endpoints (peers, a router) to connect to.
+        #[arg(long, global = true)]
+        connect: Vec<String>,
+        /// A zenoh configuration file (JSON5).
+        #[arg(long, global = true)]
+        zenoh_config: Option<PathBuf>,
+        /// Who is commanding.
+        #[arg(long = "as", global = true, default_value = "operator")]
+        identity: String,
+        /// Wait for the command to be done or failed, at most this many
+        /// seconds.
+        #[arg(long, global = true)]
+        wait: Option<f64>,
+        /// The command is stale after this many seconds of the robot's time.
+        #[arg(long, global = true, default_value_t = 10.0)]
+        deadline: f64,
+        /// Print the result as JSON.
+        #[arg(long, global = true)]
+        json: bool,
+    },
     /// Replay a run recorded with `stucco run --record` through the
     /// executive and check it gives the same command at every tick. Exit
     /// code: 0 identical, 1 not, 2 bad input.
@@ -95,6 +153,227 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// What `stucco op NAME` does.
+#[derive(Subcommand, Clone, Debug)]
+enum OpAction {
+    /// Is it there? (a harmless query)
+    Status,
+    /// Stop now (the e-stop lane).
+    Stop,
+    /// Pause the mission.
+    Pause,
+    /// Resume it.
+    Resume,
+    /// Give the mission up.
+    Abort,
+    /// Give the current task up.
+    Skip,
+    /// Answer a task waiting for the operator.
+    Continue,
+    /// Map the room.
+    MapRoom,
+    /// Drive through a door the robot knows.
+    PassDoor {
+        /// The door's index.
+        #[arg(long)]
+        door: usize,
+    },
+    /// Move relative to where the robot is.
+    Move {
+        /// Forward, m.
+        #[arg(long, default_value_t = 0.0)]
+        dx: f64,
+        /// Left, m.
+        #[arg(long, default_value_t = 0.0)]
+        dy: f64,
+        /// Turn, degrees.
+        #[arg(long, default_value_t = 0.0)]
+        dtheta: f64,
+    },
+    /// Follow a wall at a standoff.
+    FollowWall {
+        /// west, south, east or north.
+        #[arg(long, value_parser = parse_wall)]
+        wall: WallName,
+        /// Distance from the wall, m.
+        #[arg(long)]
+        standoff: f64,
+        /// Start along the wall, m.
+        #[arg(long)]
+        from: f64,
+        /// End along the wall, m.
+        #[arg(long)]
+        to: f64,
+    },
+    /// Stop parallel to a wall.
+    Align {
+        /// west, south, east or north.
+        #[arg(long, value_parser = parse_wall)]
+        wall: WallName,
+        /// Distance from the wall, m.
+        #[arg(long)]
+        standoff: f64,
+        /// Position along it, m.
+        #[arg(long)]
+        at: f64,
+        /// The wall on the robot's right (left by default).
+        #[arg(long)]
+        right: bool,
+    },
+    /// Drive directly for a moment.
+    Jog {
+        /// Front-wheel speed, m/s.
+        #[arg(long)]
+        speed: f64,
+        /// Steering, degrees.
+        #[arg(long, default_value_t = 0.0)]
+        steer: f64,
+        /// Time to live, s.
+        #[arg(long, default_value_t = 0.5)]
+        ttl: f64,
+    },
+    /// Follow the robot's state, events and replies.
+    Watch {
+        /// Stop after this many seconds.
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
+    /// Command → acknowledgement latency over N status queries.
+    Bench {
+        /// Commands to send.
+        #[arg(long, default_value_t = 1000)]
+        count: usize,
+    },
+}
+
+fn parse_wall(s: &str) -> Result<WallName, String> {
+    serde_json::from_value(serde_json::Value::String(s.to_owned()))
+        .map_err(|_| format!("{s}: one of west, south, east, north"))
+}
+
+/// `stucco op`.
+#[allow(clippy::too_many_arguments)]
+fn op(
+    target: String,
+    action: Option<OpAction>,
+    link: LinkConfig,
+    identity: String,
+    wait: Option<f64>,
+    deadline: f64,
+    json: bool,
+) -> ExitCode {
+    let mut operator = match Operator::connect(&link, &identity) {
+        Ok(o) => o,
+        Err(e) => return fail(&e),
+    };
+    let Some(action) = action else {
+        if target == "list" {
+            return match operator.list() {
+                Ok(names) if json => print_json(&names),
+                Ok(names) => {
+                    for n in names {
+                        println!("{n}");
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(&e),
+            };
+        }
+        eprintln!("error: stucco op {target}: what? (a command, watch or bench; see --help)");
+        return ExitCode::from(2);
+    };
+    let command = match action {
+        OpAction::Watch { seconds } => {
+            return match operator.watch(&target, seconds, |line| println!("{line}")) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => fail(&e),
+            };
+        }
+        OpAction::Bench { count } => {
+            return match operator.bench(&target, count.max(1)) {
+                Ok(r) if json => print_json(&r),
+                Ok(r) => {
+                    println!(
+                        "{} commands to {target}: acknowledged in {:.3} ms (median), {:.3} ms (p99), {:.3} ms at most",
+                        r.count, r.p50_ms, r.p99_ms, r.max_ms
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(&e),
+            };
+        }
+        OpAction::Status => Tc::Status,
+        OpAction::Stop => Tc::Stop,
+        OpAction::Pause => Tc::Pause,
+        OpAction::Resume => Tc::Resume,
+        OpAction::Abort => Tc::Abort,
+        OpAction::Skip => Tc::Skip,
+        OpAction::Continue => Tc::Continue,
+        OpAction::MapRoom => Tc::MapRoom,
+        OpAction::PassDoor { door } => Tc::PassDoor { door },
+        OpAction::Move { dx, dy, dtheta } => Tc::MoveRelative {
+            dx_m: dx,
+            dy_m: dy,
+            dtheta_deg: dtheta,
+        },
+        OpAction::FollowWall {
+            wall,
+            standoff,
+            from,
+            to,
+        } => Tc::FollowWall {
+            wall,
+            standoff_m: standoff,
+            from_m: from,
+            to_m: to,
+        },
+        OpAction::Align {
+            wall,
+            standoff,
+            at,
+            right,
+        } => Tc::AlignToWall {
+            wall,
+            standoff_m: standoff,
+            at_m: at,
+            side: if right { Side::Right } else { Side::Left },
+        },
+        OpAction::Jog { speed, steer, ttl } => Tc::Jog {
+            speed_mps: speed,
+            steer_rad: steer.to_radians(),
+            ttl_s: ttl,
+        },
+    };
+    let wait = wait.map(std::time::Duration::from_secs_f64);
+    match operator.send(&target, command, deadline, wait) {
+        Ok(r) => {
+            let last = r.last.as_ref().unwrap_or(&r.ack);
+            if json {
+                print_json(&r);
+            } else {
+                println!("{target}: {}", describe(&r.ack.reply));
+                if let Some(l) = &r.last {
+                    println!("{target}: {}", describe(&l.reply));
+                }
+            }
+            match last.reply {
+                Reply::Accepted | Reply::Done => ExitCode::SUCCESS,
+                _ => ExitCode::FAILURE,
+            }
+        }
+        Err(e) => fail(&e),
+    }
+}
+
+fn describe(r: &Reply) -> String {
+    match r {
+        Reply::Accepted => "accepted".to_owned(),
+        Reply::Done => "done".to_owned(),
+        Reply::Rejected { reason } => format!("rejected: {reason}"),
+        Reply::Failed { reason } => format!("failed: {reason}"),
+    }
 }
 
 /// Prints `value` as one line of JSON.
@@ -336,6 +615,60 @@ fn main() -> ExitCode {
                 )
             }
         }
+        Command::Robot {
+            mission,
+            name,
+            listen,
+            connect,
+            zenoh_config,
+            speed,
+            stop_after,
+        } => {
+            let job = RobotJob {
+                mission,
+                name,
+                link: LinkConfig {
+                    listen,
+                    connect,
+                    config_file: zenoh_config,
+                },
+                speed,
+                stop_after_s: stop_after,
+            };
+            eprintln!(
+                "robot {} on zenoh: stucco/{}/... (Ctrl-C stops it)",
+                job.name, job.name
+            );
+            match run_robot(&job, &Arc::new(AtomicBool::new(false))) {
+                Ok(sim) => {
+                    eprintln!("robot {}: {sim:.1} s simulated", job.name);
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(&e),
+            }
+        }
+        Command::Op {
+            target,
+            action,
+            connect,
+            zenoh_config,
+            identity,
+            wait,
+            deadline,
+            json,
+        } => op(
+            target,
+            action,
+            LinkConfig {
+                listen: Vec::new(),
+                connect,
+                config_file: zenoh_config,
+            },
+            identity,
+            wait,
+            deadline,
+            json,
+        ),
         Command::ReplayRun { recording, json } => match replay_run(&recording) {
             Ok(r) => {
                 if json {

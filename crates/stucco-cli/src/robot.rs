@@ -1,0 +1,149 @@
+//! `stucco robot`: the executive and the simulator paced to the wall clock
+//! (or faster), commanded and watched over zenoh through `stucco-link`.
+
+use crate::mission::{BadInput, Mission};
+use crate::navigator::{DT_S, Navigator};
+use anyhow::{Context, Result};
+use nalgebra::SVector;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+use stucco_control::GainSchedule;
+use stucco_core::{Pose2, Stamp};
+use stucco_link::{LinkConfig, RobotLink};
+use stucco_mission::{BehaviourKind, Executive, ExecutiveConfig, Hazard, Inputs, MissionMode};
+use stucco_sim::{SimConfig, WorldSpec};
+
+/// What `stucco robot` was asked to do.
+#[derive(Clone, Debug)]
+pub struct RobotJob {
+    /// The mission file (its world, its start, its failsafe; its tasks run
+    /// first, then the operator's).
+    pub mission: PathBuf,
+    /// The robot's name on the network.
+    pub name: String,
+    /// How to join the network.
+    pub link: LinkConfig,
+    /// Simulated seconds per wall-clock second (1: real time).
+    pub speed: f64,
+    /// Stop after this much simulated time (none: until told to stop).
+    pub stop_after_s: Option<f64>,
+}
+
+/// The robot's state as `stucco/NAME/state` publishes it.
+#[derive(Clone, Debug, Serialize)]
+pub struct RobotState<'a> {
+    /// Simulated time.
+    pub stamp: Stamp,
+    /// The robot's name.
+    pub name: &'a str,
+    /// The mission's state.
+    pub mission: &'a MissionMode,
+    /// The task under way: index and name.
+    pub task: Option<(usize, &'static str)>,
+    /// The behaviour under way.
+    pub behaviour: Option<&'a BehaviourKind>,
+    /// The estimated pose in the room.
+    pub pose: Pose2,
+    /// Its position σ, m.
+    pub position_sigma_m: f64,
+    /// What the supervisor holds the robot for.
+    pub hazard: Option<Hazard>,
+}
+
+/// Runs the robot until `stop` is set or the job's time is up; returns the
+/// simulated seconds run.
+pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
+    let mission = Mission::load(&job.mission)?;
+    let known = mission
+        .start
+        .clone()
+        .ok_or_else(|| BadInput(format!("{}: no [start]", job.mission.display())))?;
+    let world_path = mission.world_path(&job.mission);
+    let mut world = WorldSpec::load(&world_path)
+        .map_err(|e| BadInput(format!("the world of {}: {e:#}", job.mission.display())))?;
+    if !mission.people {
+        world.people.clear();
+    }
+    if !(job.speed.is_finite() && job.speed > 0.0) {
+        return Err(BadInput("--speed: a positive number".to_owned()).into());
+    }
+    // The room frame is the world's when the room's corner is at the origin
+    // (the worlds shipped); the robot is put at the world's start.
+    let s = Pose2::new(
+        world.robot.at[0],
+        world.robot.at[1],
+        world.robot.heading_deg.to_radians(),
+    );
+    let off = known.pose_sigma_m;
+    let x0 = SVector::<f64, 5>::new(
+        s.x + off,
+        s.y - off,
+        s.theta + 0.01,
+        known.room_m[0],
+        known.room_m[1],
+    );
+    let mut nav = Navigator::new(&world, mission.seed, x0, [known.room_sigma_m; 2])?;
+    nav.discover_doors(true);
+    let mut exec = Executive::new(
+        ExecutiveConfig {
+            vehicle: SimConfig::default().vehicle,
+            gains: GainSchedule::default(),
+            safety: mission.failsafe.clone(),
+            unattended: false,
+        },
+        mission.tasks.clone(),
+    );
+    let session = stucco_link::open(&job.link).context("joining the zenoh network")?;
+    let mut link = RobotLink::new(&session, &job.name)?;
+    let t0 = Instant::now();
+    let mut bumper = false;
+    let mut step = 0u64;
+    loop {
+        let now = nav.now();
+        let sim_s = now.as_secs_f64();
+        if stop.load(Ordering::Relaxed) || job.stop_after_s.is_some_and(|t| sim_s >= t) {
+            break;
+        }
+        let telecommands = link.take_commands(now);
+        let est = nav.mission_estimate();
+        let out = exec.tick(
+            now,
+            &Inputs {
+                estimate: &est,
+                obstacles: nav.obstacles(),
+                bumper,
+                estop: false,
+                operator: &[],
+                telecommands: &telecommands,
+            },
+        );
+        link.send_acks(&out.acks)?;
+        link.publish_events(&out.events)?;
+        if step.is_multiple_of(5) {
+            link.publish_state(&RobotState {
+                stamp: now,
+                name: &job.name,
+                mission: exec.mode(),
+                task: exec.current_task(),
+                behaviour: exec.current_behaviour(),
+                pose: est.pose,
+                position_sigma_m: est.position_sigma_m,
+                hazard: exec.hazard(),
+            })?;
+        }
+        if step.is_multiple_of(50) {
+            link.heartbeat(now)?;
+        }
+        bumper = nav.drive(out.drive);
+        step += 1;
+        // Paced: simulated time runs `speed` times the wall clock.
+        let due = t0 + Duration::from_secs_f64((sim_s + DT_S) / job.speed);
+        if let Some(wait) = due.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+    }
+    Ok(nav.now().as_secs_f64())
+}

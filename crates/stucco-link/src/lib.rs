@@ -1,0 +1,328 @@
+//! The robot's link over Eclipse Zenoh — the only crate of stucco that
+//! knows zenoh.
+//!
+//! Key expressions, one robot named `NAME`:
+//! - `stucco/NAME/cmd`: a queryable; a query's payload is a
+//!   [`Telecommand`] as JSON, its reply the first [`Ack`] (JSON);
+//! - `stucco/NAME/acks`: every reply, published (the later `done` or
+//!   `failed` of an accepted command too);
+//! - `stucco/NAME/state`, `stucco/NAME/events`: the robot's state and its
+//!   executive's events, JSON;
+//! - `stucco/NAME/heartbeat`: once a second;
+//! - `stucco/NAME/info`: a queryable answering the robot's name (for
+//!   `stucco op list`).
+//!
+//! JSON throughout, so any zenoh client (Python, C, the zenoh CLI tools)
+//! can command and watch a robot.
+
+use serde::Serialize;
+use std::time::{Duration, Instant};
+use stucco_core::{Ack, Reply, Stamp, Telecommand};
+use zenoh::Wait;
+use zenoh::handlers::FifoChannelHandler;
+use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::query::{Query, Queryable};
+use zenoh::sample::Sample;
+
+pub use zenoh::Session;
+
+/// What can go wrong on the link.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// Zenoh refused or failed.
+    #[error("zenoh: {0}")]
+    Zenoh(String),
+    /// A message was not what stucco writes.
+    #[error("a message on {key} is not valid: {why}")]
+    Malformed {
+        /// Where it came from.
+        key: String,
+        /// Why.
+        why: String,
+    },
+    /// No reply came before the deadline.
+    #[error("no reply from {robot} before the deadline ({tries} tries)")]
+    NoReply {
+        /// The robot.
+        robot: String,
+        /// Tries made.
+        tries: usize,
+    },
+}
+
+fn z(e: impl std::fmt::Display) -> LinkError {
+    LinkError::Zenoh(e.to_string())
+}
+
+/// The key expressions of robot `name`.
+pub mod keys {
+    /// Commands (queryable).
+    pub fn cmd(name: &str) -> String {
+        format!("stucco/{name}/cmd")
+    }
+    /// Every reply.
+    pub fn acks(name: &str) -> String {
+        format!("stucco/{name}/acks")
+    }
+    /// The robot's state.
+    pub fn state(name: &str) -> String {
+        format!("stucco/{name}/state")
+    }
+    /// The executive's events.
+    pub fn events(name: &str) -> String {
+        format!("stucco/{name}/events")
+    }
+    /// Once a second.
+    pub fn heartbeat(name: &str) -> String {
+        format!("stucco/{name}/heartbeat")
+    }
+    /// Who is there (queryable).
+    pub fn info(name: &str) -> String {
+        format!("stucco/{name}/info")
+    }
+}
+
+/// How to join the zenoh network.
+#[derive(Clone, Debug, Default)]
+pub struct LinkConfig {
+    /// Endpoints to listen on (`tcp/127.0.0.1:7447`,
+    /// `unixsock-stream/PATH`); none: connect only.
+    pub listen: Vec<String>,
+    /// Endpoints (peers or a router) to connect to.
+    pub connect: Vec<String>,
+    /// A zenoh configuration file (JSON5), read first; the endpoints
+    /// above are added to it.
+    pub config_file: Option<std::path::PathBuf>,
+}
+
+/// Opens a zenoh session in peer mode, multicast scouting off: the
+/// endpoints say whom to talk to.
+pub fn open(cfg: &LinkConfig) -> Result<Session, LinkError> {
+    let mut c = match &cfg.config_file {
+        Some(path) => zenoh::Config::from_file(path).map_err(z)?,
+        None => {
+            let mut c = zenoh::Config::default();
+            c.insert_json5("mode", "\"peer\"").map_err(z)?;
+            c
+        }
+    };
+    c.insert_json5("scouting/multicast/enabled", "false")
+        .map_err(z)?;
+    let list = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".to_owned());
+    if !cfg.listen.is_empty() || cfg.config_file.is_none() {
+        c.insert_json5("listen/endpoints", &list(&cfg.listen))
+            .map_err(z)?;
+    }
+    if !cfg.connect.is_empty() {
+        c.insert_json5("connect/endpoints", &list(&cfg.connect))
+            .map_err(z)?;
+    }
+    zenoh::open(c).wait().map_err(z)
+}
+
+/// The robot's side: commands in, replies, state and events out.
+pub struct RobotLink {
+    name: String,
+    cmd: Queryable<FifoChannelHandler<Query>>,
+    info: Queryable<FifoChannelHandler<Query>>,
+    /// Queries waiting for the first reply to their command.
+    pending: Vec<(String, Query)>,
+    acks: Publisher<'static>,
+    state: Publisher<'static>,
+    events: Publisher<'static>,
+    heartbeat: Publisher<'static>,
+}
+
+impl RobotLink {
+    /// Declares robot `name` on `session`.
+    pub fn new(session: &Session, name: &str) -> Result<Self, LinkError> {
+        let publisher = |k: String| -> Result<Publisher<'static>, LinkError> {
+            session.declare_publisher(k).express(true).wait().map_err(z)
+        };
+        Ok(RobotLink {
+            name: name.to_owned(),
+            cmd: session
+                .declare_queryable(keys::cmd(name))
+                .wait()
+                .map_err(z)?,
+            info: session
+                .declare_queryable(keys::info(name))
+                .wait()
+                .map_err(z)?,
+            pending: Vec::new(),
+            acks: publisher(keys::acks(name))?,
+            state: publisher(keys::state(name))?,
+            events: publisher(keys::events(name))?,
+            heartbeat: publisher(keys::heartbeat(name))?,
+        })
+    }
+
+    /// The telecommands that came in since the last call. A query whose
+    /// payload is not a telecommand is answered at once with a rejection.
+    pub fn take_commands(&mut self, now: Stamp) -> Vec<Telecommand> {
+        let mut out = Vec::new();
+        while let Ok(Some(q)) = self.cmd.try_recv() {
+            let parsed = q
+                .payload()
+                .map(|p| p.to_bytes().into_owned())
+                .ok_or_else(|| "no payload".to_owned())
+                .and_then(|b| serde_json::from_slice::<Telecommand>(&b).map_err(|e| e.to_string()));
+            match parsed {
+                Ok(t) => {
+                    self.pending.push((t.id.clone(), q));
+                    out.push(t);
+                }
+                Err(why) => {
+                    let ack = Ack {
+                        id: String::new(),
+                        stamp: now,
+                        reply: Reply::Rejected {
+                            reason: format!("not a telecommand: {why}"),
+                        },
+                    };
+                    if let Ok(json) = serde_json::to_vec(&ack) {
+                        let _ = q.reply(q.key_expr().clone(), json).wait();
+                    }
+                }
+            }
+        }
+        while let Ok(Some(q)) = self.info.try_recv() {
+            let _ = q.reply(q.key_expr().clone(), self.name.clone()).wait();
+        }
+        out
+    }
+
+    /// Sends the executive's replies: each answers the queries waiting for
+    /// its command, and all are published on `acks`.
+    pub fn send_acks(&mut self, acks: &[Ack]) -> Result<(), LinkError> {
+        for a in acks {
+            let json = serde_json::to_vec(a).map_err(z)?;
+            let (answered, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut self.pending)
+                .into_iter()
+                .partition(|(id, _)| *id == a.id);
+            self.pending = rest;
+            for (_, q) in answered {
+                q.reply(q.key_expr().clone(), json.clone())
+                    .wait()
+                    .map_err(z)?;
+            }
+            self.acks.put(json).wait().map_err(z)?;
+        }
+        Ok(())
+    }
+
+    /// Publishes the robot's state.
+    pub fn publish_state(&self, state: &impl Serialize) -> Result<(), LinkError> {
+        let json = serde_json::to_vec(state).map_err(z)?;
+        self.state.put(json).wait().map_err(z)
+    }
+
+    /// Publishes events.
+    pub fn publish_events<E: Serialize>(&self, events: &[E]) -> Result<(), LinkError> {
+        for e in events {
+            let json = serde_json::to_vec(e).map_err(z)?;
+            self.events.put(json).wait().map_err(z)?;
+        }
+        Ok(())
+    }
+
+    /// Publishes the heartbeat.
+    pub fn heartbeat(&self, now: Stamp) -> Result<(), LinkError> {
+        self.heartbeat
+            .put(serde_json::to_vec(&now).map_err(z)?)
+            .wait()
+            .map_err(z)
+    }
+}
+
+/// The operator's side.
+pub struct OperatorClient {
+    session: Session,
+}
+
+impl OperatorClient {
+    /// A client on `session`.
+    pub fn new(session: Session) -> Self {
+        OperatorClient { session }
+    }
+
+    /// Sends `t` to `robot` and returns its first reply, retrying every
+    /// `retry` until one comes or `give_up` passes.
+    pub fn send(
+        &self,
+        robot: &str,
+        t: &Telecommand,
+        retry: Duration,
+        give_up: Instant,
+    ) -> Result<Ack, LinkError> {
+        let json = serde_json::to_vec(t).map_err(z)?;
+        let key = keys::cmd(robot);
+        let mut tries = 0;
+        while Instant::now() < give_up {
+            tries += 1;
+            let wait = retry.min(give_up.saturating_duration_since(Instant::now()));
+            let replies = self
+                .session
+                .get(&key)
+                .payload(json.clone())
+                .timeout(wait)
+                .wait()
+                .map_err(z)?;
+            while let Ok(Some(reply)) = replies.recv_timeout(wait) {
+                if let Ok(sample) = reply.result() {
+                    let ack = parse::<Ack>(sample)?;
+                    if ack.id == t.id {
+                        return Ok(ack);
+                    }
+                }
+            }
+        }
+        Err(LinkError::NoReply {
+            robot: robot.to_owned(),
+            tries,
+        })
+    }
+
+    /// Every reply `robot` publishes from now on.
+    pub fn acks(&self, robot: &str) -> Result<Subscriber<FifoChannelHandler<Sample>>, LinkError> {
+        self.session
+            .declare_subscriber(keys::acks(robot))
+            .wait()
+            .map_err(z)
+    }
+
+    /// A subscriber to one of `robot`'s topics (`state`, `events`,
+    /// `heartbeat`).
+    pub fn watch(&self, key: String) -> Result<Subscriber<FifoChannelHandler<Sample>>, LinkError> {
+        self.session.declare_subscriber(key).wait().map_err(z)
+    }
+
+    /// The robots that answer within `timeout`.
+    pub fn list(&self, timeout: Duration) -> Result<Vec<String>, LinkError> {
+        let replies = self
+            .session
+            .get("stucco/*/info")
+            .timeout(timeout)
+            .wait()
+            .map_err(z)?;
+        let mut names = Vec::new();
+        while let Ok(Some(reply)) = replies.recv_timeout(timeout) {
+            if let Ok(s) = reply.result()
+                && let Ok(name) = s.payload().try_to_string()
+            {
+                names.push(name.into_owned());
+            }
+        }
+        names.sort();
+        names.dedup();
+        Ok(names)
+    }
+}
+
+/// The JSON payload of `sample`.
+pub fn parse<T: serde::de::DeserializeOwned>(sample: &Sample) -> Result<T, LinkError> {
+    serde_json::from_slice(&sample.payload().to_bytes()).map_err(|e| LinkError::Malformed {
+        key: sample.key_expr().to_string(),
+        why: e.to_string(),
+    })
+}

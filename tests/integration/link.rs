@@ -1,0 +1,73 @@
+//! The robot process and the operator's console over zenoh, in one test
+//! process: two sessions over a Unix socket in a temporary folder (never a
+//! fixed TCP port).
+
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
+use stucco_core::{Command, Reply};
+
+#[test]
+fn an_operator_commands_a_robot_over_zenoh() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
+    let job = RobotJob {
+        mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
+        name: "r1".to_owned(),
+        link: LinkConfig {
+            listen: vec![endpoint.clone()],
+            ..LinkConfig::default()
+        },
+        speed: 10.0,
+        stop_after_s: Some(600.0),
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let robot = {
+        let stop = stop.clone();
+        std::thread::spawn(move || run_robot(&job, &stop))
+    };
+    std::thread::sleep(Duration::from_millis(500));
+    let mut op = Operator::connect(
+        &LinkConfig {
+            connect: vec![endpoint],
+            ..LinkConfig::default()
+        },
+        "ann",
+    )
+    .unwrap();
+    assert_eq!(op.list().unwrap(), ["r1"]);
+    // A harmless query: done at once.
+    let r = op.send("r1", Command::Status, 10.0, None).unwrap();
+    assert_eq!(r.ack.reply, Reply::Done);
+    // A move: accepted, then done.
+    let r = op
+        .send(
+            "r1",
+            Command::MoveRelative {
+                dx_m: 0.5,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+            },
+            10.0,
+            Some(Duration::from_secs(30)),
+        )
+        .unwrap();
+    assert_eq!(r.ack.reply, Reply::Accepted);
+    assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done));
+    // Stale: its deadline already past in the robot's time.
+    let r = op.send("r1", Command::MapRoom, -1.0, None).unwrap();
+    assert!(matches!(&r.ack.reply, Reply::Rejected { reason } if reason.contains("stale")));
+    // A door it does not know.
+    let r = op
+        .send("r1", Command::PassDoor { door: 7 }, 10.0, None)
+        .unwrap();
+    assert!(matches!(&r.ack.reply, Reply::Rejected { reason } if reason.contains("not known")));
+    // Round trips, measured (the figure is the bench's to report).
+    let b = op.bench("r1", 50).unwrap();
+    assert_eq!(b.count, 50);
+    assert!(b.p50_ms > 0.0 && b.p50_ms <= b.p99_ms);
+    stop.store(true, Ordering::Relaxed);
+    robot.join().unwrap().unwrap();
+}
