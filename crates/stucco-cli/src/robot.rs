@@ -139,10 +139,17 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
         }
         bumper = nav.drive(out.drive);
         step += 1;
-        // Paced: simulated time runs `speed` times the wall clock.
+        // Paced: simulated time runs `speed` times the wall clock. Until the
+        // next period, commands are taken as they come and answered at once.
         let due = t0 + Duration::from_secs_f64((sim_s + DT_S) / job.speed);
-        if let Some(wait) = due.checked_duration_since(Instant::now()) {
-            std::thread::sleep(wait);
+        while let Some(wait) = due.checked_duration_since(Instant::now()) {
+            let now = nav.now();
+            let cmds = link.wait_commands(now, wait);
+            if !cmds.is_empty() {
+                let est = nav.mission_estimate();
+                let acks = exec.telecommands(now, &cmds, &est);
+                link.send_acks(&acks)?;
+            }
         }
     }
     Ok(nav.now().as_secs_f64())

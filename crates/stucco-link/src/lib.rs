@@ -162,34 +162,52 @@ impl RobotLink {
     pub fn take_commands(&mut self, now: Stamp) -> Vec<Telecommand> {
         let mut out = Vec::new();
         while let Ok(Some(q)) = self.cmd.try_recv() {
-            let parsed = q
-                .payload()
-                .map(|p| p.to_bytes().into_owned())
-                .ok_or_else(|| "no payload".to_owned())
-                .and_then(|b| serde_json::from_slice::<Telecommand>(&b).map_err(|e| e.to_string()));
-            match parsed {
-                Ok(t) => {
-                    self.pending.push((t.id.clone(), q));
-                    out.push(t);
-                }
-                Err(why) => {
-                    let ack = Ack {
-                        id: String::new(),
-                        stamp: now,
-                        reply: Reply::Rejected {
-                            reason: format!("not a telecommand: {why}"),
-                        },
-                    };
-                    if let Ok(json) = serde_json::to_vec(&ack) {
-                        let _ = q.reply(q.key_expr().clone(), json).wait();
-                    }
+            self.accept_query(q, now, &mut out);
+        }
+        self.serve_info();
+        out
+    }
+
+    /// Waits up to `timeout` for telecommands; returns those that came.
+    pub fn wait_commands(&mut self, now: Stamp, timeout: Duration) -> Vec<Telecommand> {
+        let mut out = Vec::new();
+        if let Ok(Some(q)) = self.cmd.recv_timeout(timeout) {
+            self.accept_query(q, now, &mut out);
+        }
+        out.extend(self.take_commands(now));
+        out
+    }
+
+    fn accept_query(&mut self, q: Query, now: Stamp, out: &mut Vec<Telecommand>) {
+        let parsed = q
+            .payload()
+            .map(|p| p.to_bytes().into_owned())
+            .ok_or_else(|| "no payload".to_owned())
+            .and_then(|b| serde_json::from_slice::<Telecommand>(&b).map_err(|e| e.to_string()));
+        match parsed {
+            Ok(t) => {
+                self.pending.push((t.id.clone(), q));
+                out.push(t);
+            }
+            Err(why) => {
+                let ack = Ack {
+                    id: String::new(),
+                    stamp: now,
+                    reply: Reply::Rejected {
+                        reason: format!("not a telecommand: {why}"),
+                    },
+                };
+                if let Ok(json) = serde_json::to_vec(&ack) {
+                    let _ = q.reply(q.key_expr().clone(), json).wait();
                 }
             }
         }
+    }
+
+    fn serve_info(&mut self) {
         while let Ok(Some(q)) = self.info.try_recv() {
             let _ = q.reply(q.key_expr().clone(), self.name.clone()).wait();
         }
-        out
     }
 
     /// Sends the executive's replies: each answers the queries waiting for

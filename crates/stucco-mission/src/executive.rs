@@ -464,6 +464,17 @@ impl Executive {
         }
     }
 
+    /// Takes telecommands between ticks (as soon as they arrive) and
+    /// returns the replies: acceptance never waits for the next control
+    /// period. The effects (a stop, a queued task, a jog) show in the next
+    /// tick's command.
+    pub fn telecommands(&mut self, now: Stamp, cmds: &[Telecommand], est: &Estimate) -> Vec<Ack> {
+        for t in cmds {
+            self.telecommand(now, t, est);
+        }
+        std::mem::take(&mut self.acks)
+    }
+
     /// Follows an operator command: whether the progress changed, or why
     /// it cannot be followed.
     fn operator(&mut self, now: Stamp, cmd: OperatorCommand) -> Result<bool, String> {
