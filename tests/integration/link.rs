@@ -68,6 +68,38 @@ fn an_operator_commands_a_robot_over_zenoh() {
     let b = op.bench("r1", 50).unwrap();
     assert_eq!(b.count, 50);
     assert!(b.p50_ms > 0.0 && b.p50_ms <= b.p99_ms);
+    // With an operator's heartbeat the link is up; a long move starts;
+    // the heartbeat stops: the link is lost and the mission pauses.
+    for _ in 0..10 {
+        op.heartbeat("r1").unwrap();
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let r = op
+        .send(
+            "r1",
+            Command::MoveRelative {
+                dx_m: 1.0,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+            },
+            10.0,
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.ack.reply, Reply::Accepted);
+    for _ in 0..4 {
+        op.heartbeat("r1").unwrap();
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(600));
+    let state = op.state("r1", Duration::from_secs(3)).unwrap();
+    assert_eq!(state["mission"]["state"], "paused", "{state}");
+    assert!(
+        state["mission"]["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("link")),
+        "{state}"
+    );
     stop.store(true, Ordering::Relaxed);
     robot.join().unwrap().unwrap();
 }

@@ -52,19 +52,25 @@ impl Operator {
         })
     }
 
-    /// The robot's clock: the stamp of its latest state.
-    pub fn robot_time(&self, robot: &str, within: Duration) -> Result<Stamp> {
+    /// The robot's next published state (JSON).
+    pub fn state(&self, robot: &str, within: Duration) -> Result<serde_json::Value> {
         let sub = self.client.watch(keys::state(robot))?;
         let until = Instant::now() + within;
         while let Some(left) = until.checked_duration_since(Instant::now()) {
             if let Ok(Some(s)) = sub.recv_timeout(left) {
-                let v: serde_json::Value = parse(&s)?;
-                if let Some(t) = v["stamp"].as_i64() {
-                    return Ok(Stamp::from_nanos(t));
-                }
+                return Ok(parse(&s)?);
             }
         }
         Err(anyhow!("{robot} publishes no state: is it running?"))
+    }
+
+    /// The robot's clock: the stamp of its latest state.
+    pub fn robot_time(&self, robot: &str, within: Duration) -> Result<Stamp> {
+        let v = self.state(robot, within)?;
+        v["stamp"]
+            .as_i64()
+            .map(Stamp::from_nanos)
+            .ok_or_else(|| anyhow!("{robot}'s state has no stamp"))
     }
 
     fn telecommand(&mut self, now: Stamp, deadline_s: f64, command: Command) -> Telecommand {
@@ -152,13 +158,19 @@ impl Operator {
         })
     }
 
+    /// One heartbeat to `robot`: the link is up while they come.
+    pub fn heartbeat(&self, robot: &str) -> Result<()> {
+        Ok(self.client.heartbeat(robot, &self.identity)?)
+    }
+
     /// The robots on the network.
     pub fn list(&self) -> Result<Vec<String>> {
         Ok(self.client.list(Duration::from_secs(1))?)
     }
 
     /// Prints `robot`'s state (once a second), events and replies as they
-    /// come, for `seconds` (forever without).
+    /// come, for `seconds` (forever without), and keeps the link up with
+    /// the operator's heartbeat meanwhile.
     pub fn watch(
         &self,
         robot: &str,
@@ -170,7 +182,13 @@ impl Operator {
         let acks = self.client.acks(robot)?;
         let until = seconds.map(|s| Instant::now() + Duration::from_secs_f64(s));
         let mut shown = Instant::now() - Duration::from_secs(2);
+        let mut beat = Instant::now() - Duration::from_secs(1);
         while until.is_none_or(|u| Instant::now() < u) {
+            // A person watching is the link: their heartbeat, 5 a second.
+            if beat.elapsed() >= Duration::from_millis(200) {
+                self.client.heartbeat(robot, &self.identity)?;
+                beat = Instant::now();
+            }
             let mut idle = true;
             while let Ok(Some(s)) = events.try_recv() {
                 print(format!(

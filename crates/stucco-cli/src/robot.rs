@@ -101,9 +101,18 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
     let t0 = Instant::now();
     let mut bumper = false;
     let mut step = 0u64;
+    let mut heard: Option<Instant> = None;
+    // The link's timeout on the wall clock.
+    let link_timeout = Duration::from_secs_f64(mission.failsafe.link_timeout_s / job.speed);
     loop {
         let now = nav.now();
         let sim_s = now.as_secs_f64();
+        if link.operator_heartbeat() {
+            heard = Some(Instant::now());
+        }
+        if let Some(h) = heard {
+            exec.link(now, h.elapsed() <= link_timeout);
+        }
         if stop.load(Ordering::Relaxed) || job.stop_after_s.is_some_and(|t| sim_s >= t) {
             break;
         }

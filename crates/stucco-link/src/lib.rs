@@ -10,7 +10,9 @@
 //!   executive's events, JSON;
 //! - `stucco/NAME/heartbeat`: once a second;
 //! - `stucco/NAME/info`: a queryable answering the robot's name (for
-//!   `stucco op list`).
+//!   `stucco op list`);
+//! - `stucco/NAME/operator`: the operators' heartbeats, which define the
+//!   link (its loss triggers the mission's link-loss policy).
 //!
 //! JSON throughout, so any zenoh client (Python, C, the zenoh CLI tools)
 //! can command and watch a robot.
@@ -80,6 +82,10 @@ pub mod keys {
     pub fn info(name: &str) -> String {
         format!("stucco/{name}/info")
     }
+    /// The operators' heartbeats: the link is up while they come.
+    pub fn operator(name: &str) -> String {
+        format!("stucco/{name}/operator")
+    }
 }
 
 /// How to join the zenoh network.
@@ -131,6 +137,7 @@ pub struct RobotLink {
     state: Publisher<'static>,
     events: Publisher<'static>,
     heartbeat: Publisher<'static>,
+    operators: Subscriber<FifoChannelHandler<Sample>>,
 }
 
 impl RobotLink {
@@ -154,7 +161,20 @@ impl RobotLink {
             state: publisher(keys::state(name))?,
             events: publisher(keys::events(name))?,
             heartbeat: publisher(keys::heartbeat(name))?,
+            operators: session
+                .declare_subscriber(keys::operator(name))
+                .wait()
+                .map_err(z)?,
         })
+    }
+
+    /// True when an operator's heartbeat came since the last call.
+    pub fn operator_heartbeat(&mut self) -> bool {
+        let mut any = false;
+        while let Ok(Some(_)) = self.operators.try_recv() {
+            any = true;
+        }
+        any
     }
 
     /// The telecommands that came in since the last call. A query whose
@@ -299,6 +319,14 @@ impl OperatorClient {
             robot: robot.to_owned(),
             tries,
         })
+    }
+
+    /// Publishes one heartbeat of operator `identity` to `robot`.
+    pub fn heartbeat(&self, robot: &str, identity: &str) -> Result<(), LinkError> {
+        self.session
+            .put(keys::operator(robot), identity.to_owned())
+            .wait()
+            .map_err(z)
     }
 
     /// Every reply `robot` publishes from now on.

@@ -4,7 +4,7 @@
 
 use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
 use crate::model::{Estimate, WallGeometry, pose_at_wall};
-use crate::supervisor::{Hazard, LostPolicy, SafetyConfig, Supervisor};
+use crate::supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor};
 use crate::task::{OnTimeout, TaskSpec, WallName};
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
@@ -174,6 +174,10 @@ pub enum EventKind {
         /// Why.
         reason: String,
     },
+    /// The operator's heartbeat stopped.
+    LinkLost,
+    /// It came back.
+    LinkRestored,
     /// An operator command could not be followed.
     CommandRefused {
         /// The command.
@@ -290,6 +294,8 @@ pub struct Executive {
     waiting: BTreeMap<usize, String>,
     /// Direct driving until a deadline, for a telecommand.
     jog: Option<(DriveCommand, Stamp, String)>,
+    /// Whether the operator's link is up (none: no operator yet).
+    link_up: Option<bool>,
     acks: Vec<Ack>,
 }
 
@@ -314,7 +320,37 @@ impl Executive {
             replies: BTreeMap::new(),
             waiting: BTreeMap::new(),
             jog: None,
+            link_up: None,
             acks: Vec::new(),
+        }
+    }
+
+    /// Tells the executive whether the operator's link is up (their
+    /// heartbeat came within the failsafe's `link_timeout_s`). When it goes
+    /// down, a jog stops at once and the failsafe's policy applies.
+    pub fn link(&mut self, now: Stamp, up: bool) {
+        if self.link_up == Some(up) || (self.link_up.is_none() && !up) {
+            return;
+        }
+        self.link_up = Some(up);
+        if up {
+            self.emit(now, EventKind::LinkRestored);
+            return;
+        }
+        self.emit(now, EventKind::LinkLost);
+        if let Some((_, _, id)) = self.jog.take() {
+            self.reply(
+                now,
+                &id,
+                Reply::Failed {
+                    reason: "the operator's link was lost".to_owned(),
+                },
+            );
+        }
+        if self.config.safety.on_link_loss == LinkLossPolicy::Pause
+            && self.mode == MissionMode::Running
+        {
+            self.pause(now, "the operator's link was lost".to_owned());
         }
     }
 

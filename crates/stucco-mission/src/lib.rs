@@ -41,5 +41,5 @@ pub use executive::{
     Progress, ProgressMismatch, TaskStatus,
 };
 pub use model::{DoorEstimate, Estimate, WallGeometry, pose_at_wall};
-pub use supervisor::{Hazard, LostPolicy, SafetyConfig, Supervisor, Verdict};
+pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};
 pub use task::{OnTimeout, Side, TaskSpec, WallName};

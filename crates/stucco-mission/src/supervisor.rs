@@ -21,6 +21,19 @@ pub enum LostPolicy {
     Fail,
 }
 
+/// What to do when the operator's link is lost (their heartbeat stops).
+/// A jog stops at once whatever the policy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LinkLossPolicy {
+    /// Pause the mission until the operator resumes it.
+    #[default]
+    Pause,
+    /// Go on with the autonomous task (never spraying until the link is
+    /// back).
+    Continue,
+}
+
 /// The supervisor's settings (a mission file's `[failsafe]` table).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -46,6 +59,10 @@ pub struct SafetyConfig {
     pub spray_max_sigma_m: f64,
     /// How long an obstacle may block the way before the task fails, s.
     pub blocked_timeout_s: f64,
+    /// What to do when the operator's link is lost.
+    pub on_link_loss: LinkLossPolicy,
+    /// The link is lost when no operator heartbeat came for this long, s.
+    pub link_timeout_s: f64,
 }
 
 impl Default for SafetyConfig {
@@ -61,6 +78,8 @@ impl Default for SafetyConfig {
             lost_timeout_s: 10.0,
             spray_max_sigma_m: 0.01,
             blocked_timeout_s: 30.0,
+            on_link_loss: LinkLossPolicy::Pause,
+            link_timeout_s: 1.0,
         }
     }
 }
@@ -83,6 +102,7 @@ impl SafetyConfig {
             ("lost_timeout_s", positive(self.lost_timeout_s)),
             ("spray_max_sigma_m", positive(self.spray_max_sigma_m)),
             ("blocked_timeout_s", positive(self.blocked_timeout_s)),
+            ("link_timeout_s", positive(self.link_timeout_s)),
         ];
         checks
             .into_iter()

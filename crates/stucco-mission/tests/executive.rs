@@ -862,3 +862,65 @@ fn over_a_lossy_link_every_command_is_carried_out_once_or_refused() {
         assert!(matches!(r, Reply::Rejected { .. } | Reply::Done), "{r:?}");
     }
 }
+
+/// A lost link stops a jog at once and, by default, pauses the mission;
+/// with `continue` the task goes on.
+#[test]
+fn a_lost_link_stops_a_jog_and_pauses_by_default() {
+    for policy in [LinkLossPolicy::Pause, LinkLossPolicy::Continue] {
+        let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+        let mut exec = Executive::new(
+            ExecutiveConfig {
+                vehicle: VehicleSpec::default(),
+                gains: GainSchedule::default(),
+                safety: SafetyConfig {
+                    on_link_loss: policy,
+                    ..SafetyConfig::default()
+                },
+                unattended: false,
+            },
+            vec![TaskSpec::MoveRelative {
+                dx_m: 2.0,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+                speed_mps: 0.3,
+            }],
+        );
+        exec.link(robot.now, true);
+        for _ in 0..50 {
+            tick_with(&mut exec, &mut robot, &[]);
+        }
+        let at = robot.now;
+        let jog = command(
+            "j",
+            at,
+            Command::Jog {
+                speed_mps: 0.2,
+                steer_rad: 0.0,
+                ttl_s: 1.0,
+            },
+        );
+        let out = tick_with(&mut exec, &mut robot, &[jog]);
+        assert_eq!(out.drive.speed_mps, 0.2);
+        exec.link(robot.now, false);
+        let out = tick_with(&mut exec, &mut robot, &[]);
+        assert!(
+            out.acks
+                .iter()
+                .any(|a| a.id == "j" && matches!(a.reply, Reply::Failed { .. })),
+            "{:?}",
+            out.acks
+        );
+        match policy {
+            LinkLossPolicy::Pause => {
+                assert_eq!(out.drive, DriveCommand::STOP);
+                assert!(matches!(exec.mode(), MissionMode::Paused { .. }));
+            }
+            LinkLossPolicy::Continue => {
+                // Back to the task, not the jog.
+                assert_eq!(exec.mode(), &MissionMode::Running);
+                assert_ne!(out.drive.speed_mps, 0.2);
+            }
+        }
+    }
+}
