@@ -468,6 +468,16 @@ fn print_run(r: &MissionReport) {
         r.path_length_m,
         r.safety_stops
     );
+    if let Some(e) = &r.rpe_1m {
+        println!(
+            "  relative pose error over 1 m ({} pairs): {:.1} ± {:.1} mm, {:.3} ± {:.3}°",
+            e.pairs,
+            e.trans_mean_m * 1e3,
+            e.trans_std_m * 1e3,
+            e.rot_mean_rad.to_degrees(),
+            e.rot_std_rad.to_degrees()
+        );
+    }
     for p in &r.passes {
         println!(
             "  pass along the {:?} wall (task {}): standoff {:.2} m held to {:.1} mm RMS (max {:.1}, mean {:+.1})",

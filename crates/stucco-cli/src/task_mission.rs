@@ -130,6 +130,9 @@ pub struct MissionReport {
     pub pose_max_m: f64,
     /// RMS of the heading error, rad.
     pub heading_rms_rad: f64,
+    /// Relative pose error over pairs of poses 1 m apart along the true
+    /// path (none if the robot did not drive 1 m).
+    pub rpe_1m: Option<stucco_nav::Rpe>,
     /// The room's size as estimated at the end, m.
     pub room_m: [f64; 2],
     /// Its true size, m.
@@ -789,6 +792,11 @@ fn run_once(
         pose_rms_m: (trace.pos2 / n).sqrt(),
         pose_max_m: trace.pos_max,
         heading_rms_rad: (trace.head2 / n).sqrt(),
+        rpe_1m: stucco_nav::relative_pose_error(
+            &trace.poses.0,
+            &trace.poses.1,
+            stucco_nav::Pairs::Distance(1.0),
+        ),
         room_m: est.room_m,
         room_true_m: room_true,
         room_sigma_m: est.room_sigma_m,
@@ -840,6 +848,8 @@ fn write_event(file: &mut Option<impl Write>, e: &Event) -> Result<()> {
 struct Trace {
     estimated: Vec<[f64; 2]>,
     truth: Vec<[f64; 2]>,
+    /// The poses behind them, for the relative pose error.
+    poses: (Vec<Pose2>, Vec<Pose2>),
     pos2: f64,
     head2: f64,
     pos_max: f64,
@@ -852,6 +862,8 @@ impl Trace {
     fn push(&mut self, est: &Pose2, truth: &Pose2) {
         self.estimated.push([est.x, est.y]);
         self.truth.push([truth.x, truth.y]);
+        self.poses.0.push(*est);
+        self.poses.1.push(*truth);
     }
 
     fn errors(&mut self, est: &Pose2, truth: &Pose2) {

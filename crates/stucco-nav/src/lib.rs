@@ -18,6 +18,8 @@
 //!   as a [`Displacement`] with covariance since the last scan.
 //! - [`RoomEkf`]: the robot's pose and the room's size in an EKF fed by the
 //!   encoders and by walls, each scan applied at its own stamp.
+//! - [`relative_pose_error`]: RPE (Kümmerle et al. 2009) of a trajectory.
+//! - [`WindowFinder`]: windows in the range camera's profiles.
 //! - [`synthetic`]: exact ray-cast scans of rooms with clutter, for tests.
 //!
 //! ```
@@ -48,6 +50,7 @@ mod points;
 mod ransac;
 mod room;
 mod room_ekf;
+mod rpe;
 mod rwht;
 mod segments;
 pub mod synthetic;
@@ -67,6 +70,7 @@ pub use room_ekf::{
     RoomCovariance, RoomDoor, RoomEkf, RoomEkfConfig, RoomState, ScanUpdate, observe, observe_door,
     predict,
 };
+pub use rpe::{Pairs, Rpe, relative_pose_error};
 pub use rwht::{RwhtConfig, RwhtExtractor};
 pub use segments::{Segment, SegmentTransform, Segmenter};
 pub use wall::Wall;
