@@ -1,6 +1,7 @@
 //! Acceptance tests: whole jobs on real data, asserted on what a user sees.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod acl;
 mod corridor;
 mod door_passage;
 mod link;
