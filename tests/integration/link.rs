@@ -103,3 +103,63 @@ fn an_operator_commands_a_robot_over_zenoh() {
     stop.store(true, Ordering::Relaxed);
     robot.join().unwrap().unwrap();
 }
+
+/// A site: a router, two robots and an operator connected to it as
+/// clients; the operator sees both robots and commands each by name.
+#[test]
+fn two_robots_and_an_operator_through_a_router() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = format!(
+        "unixsock-stream/{}",
+        dir.path().join("router.sock").display()
+    );
+    let _router = stucco_cli::router(&LinkConfig {
+        listen: vec![endpoint.clone()],
+        ..LinkConfig::default()
+    })
+    .unwrap();
+    let client = LinkConfig {
+        mode: stucco_cli::LinkMode::Client,
+        connect: vec![endpoint],
+        ..LinkConfig::default()
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let robots: Vec<_> = ["r1", "r2"]
+        .into_iter()
+        .map(|name| {
+            let job = RobotJob {
+                mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
+                name: name.to_owned(),
+                link: client.clone(),
+                speed: 10.0,
+                stop_after_s: Some(600.0),
+            };
+            let stop = stop.clone();
+            std::thread::spawn(move || run_robot(&job, &stop))
+        })
+        .collect();
+    std::thread::sleep(Duration::from_millis(800));
+    let mut op = Operator::connect(&client, "ann").unwrap();
+    assert_eq!(op.list().unwrap(), ["r1", "r2"]);
+    for name in ["r1", "r2"] {
+        let r = op.send(name, Command::Status, 10.0, None).unwrap();
+        assert_eq!(r.ack.reply, Reply::Done, "{name}");
+    }
+    let r = op
+        .send(
+            "r2",
+            Command::MoveRelative {
+                dx_m: 0.3,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+            },
+            10.0,
+            Some(Duration::from_secs(30)),
+        )
+        .unwrap();
+    assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done));
+    stop.store(true, Ordering::Relaxed);
+    for r in robots {
+        r.join().unwrap().unwrap();
+    }
+}

@@ -34,7 +34,7 @@ pub use op::{BenchReport, CommandResult, Operator};
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{RobotJob, RobotState, run_robot};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
-pub use stucco_link::LinkConfig;
+pub use stucco_link::{LinkConfig, Mode as LinkMode, router};
 pub use task_mission::{
     Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,
     run_task_mission, write_atomic,

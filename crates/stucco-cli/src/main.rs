@@ -14,6 +14,7 @@ use stucco_cli::{
 };
 use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
 use stucco_core::{Command as Tc, Reply, Side, WallName};
+use stucco_link::Mode;
 
 /// stucco: software of an autonomous spray-plastering robot.
 #[derive(Parser)]
@@ -98,6 +99,19 @@ enum Command {
         /// Stop after this many simulated seconds.
         #[arg(long)]
         stop_after: Option<f64>,
+        /// Join as a client of the router `--connect` names, not as a peer.
+        #[arg(long)]
+        client: bool,
+    },
+    /// A zenoh router for a site: robots and operators connect to it
+    /// (`--client`) and it routes between them; runs until stopped.
+    Router {
+        /// Endpoints to listen on (e.g. `tcp/0.0.0.0:7447`).
+        #[arg(long, required = true)]
+        listen: Vec<String>,
+        /// A zenoh configuration file (JSON5).
+        #[arg(long)]
+        zenoh_config: Option<PathBuf>,
     },
     /// The operator's console: `stucco op list`, or `stucco op NAME
     /// <command>` (a telecommand, `watch` or `bench`). Exit code: 0 done or
@@ -127,6 +141,9 @@ enum Command {
         /// Print the result as JSON.
         #[arg(long, global = true)]
         json: bool,
+        /// Join as a client of the router `--connect` names, not as a peer.
+        #[arg(long, global = true)]
+        client: bool,
     },
     /// Replay a run recorded with `stucco run --record` through the
     /// executive and check it gives the same command at every tick. Exit
@@ -633,11 +650,13 @@ fn main() -> ExitCode {
             zenoh_config,
             speed,
             stop_after,
+            client,
         } => {
             let job = RobotJob {
                 mission,
                 name,
                 link: LinkConfig {
+                    mode: if client { Mode::Client } else { Mode::Peer },
                     listen,
                     connect,
                     config_file: zenoh_config,
@@ -666,10 +685,12 @@ fn main() -> ExitCode {
             wait,
             deadline,
             json,
+            client,
         } => op(
             target,
             action,
             LinkConfig {
+                mode: if client { Mode::Client } else { Mode::Peer },
                 listen: Vec::new(),
                 connect,
                 config_file: zenoh_config,
@@ -679,6 +700,26 @@ fn main() -> ExitCode {
             deadline,
             json,
         ),
+        Command::Router {
+            listen,
+            zenoh_config,
+        } => {
+            let cfg = LinkConfig {
+                mode: Mode::Router,
+                listen,
+                connect: Vec::new(),
+                config_file: zenoh_config,
+            };
+            match stucco_link::router(&cfg) {
+                Ok(_session) => {
+                    eprintln!("router on {:?} (Ctrl-C stops it)", cfg.listen);
+                    loop {
+                        std::thread::park();
+                    }
+                }
+                Err(e) => fail(&anyhow::Error::from(e)),
+            }
+        }
         Command::ReplayRun { recording, json } => match replay_run(&recording) {
             Ok(r) => {
                 if json {

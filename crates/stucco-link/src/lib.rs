@@ -28,6 +28,15 @@ use zenoh::sample::Sample;
 
 pub use zenoh::Session;
 
+/// Runs a router: a session in router mode that the robots and operators
+/// of a site connect to; it routes until dropped.
+pub fn router(cfg: &LinkConfig) -> Result<Session, LinkError> {
+    open(&LinkConfig {
+        mode: Mode::Router,
+        ..cfg.clone()
+    })
+}
+
 /// What can go wrong on the link.
 #[derive(Debug, thiserror::Error)]
 pub enum LinkError {
@@ -88,9 +97,24 @@ pub mod keys {
     }
 }
 
+/// A session's role on the network.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Mode {
+    /// Talks directly to the peers it connects to or that connect to it
+    /// (the default: one robot, one operator, nothing else needed).
+    #[default]
+    Peer,
+    /// Talks through the router it connects to (a site's network).
+    Client,
+    /// Routes for the others (`stucco router`).
+    Router,
+}
+
 /// How to join the zenoh network.
 #[derive(Clone, Debug, Default)]
 pub struct LinkConfig {
+    /// The session's role.
+    pub mode: Mode,
     /// Endpoints to listen on (`tcp/127.0.0.1:7447`,
     /// `unixsock-stream/PATH`); none: connect only.
     pub listen: Vec<String>,
@@ -101,17 +125,21 @@ pub struct LinkConfig {
     pub config_file: Option<std::path::PathBuf>,
 }
 
-/// Opens a zenoh session in peer mode, multicast scouting off: the
-/// endpoints say whom to talk to.
+/// Opens a zenoh session, multicast scouting off: the endpoints say whom
+/// to talk to.
 pub fn open(cfg: &LinkConfig) -> Result<Session, LinkError> {
+    let mode = match cfg.mode {
+        Mode::Peer => "\"peer\"",
+        Mode::Client => "\"client\"",
+        Mode::Router => "\"router\"",
+    };
     let mut c = match &cfg.config_file {
         Some(path) => zenoh::Config::from_file(path).map_err(z)?,
-        None => {
-            let mut c = zenoh::Config::default();
-            c.insert_json5("mode", "\"peer\"").map_err(z)?;
-            c
-        }
+        None => zenoh::Config::default(),
     };
+    if cfg.config_file.is_none() || cfg.mode != Mode::Peer {
+        c.insert_json5("mode", mode).map_err(z)?;
+    }
     c.insert_json5("scouting/multicast/enabled", "false")
         .map_err(z)?;
     let list = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".to_owned());
@@ -345,9 +373,12 @@ impl OperatorClient {
 
     /// The robots that answer within `timeout`.
     pub fn list(&self, timeout: Duration) -> Result<Vec<String>, LinkError> {
+        // Every robot's queryable, every reply.
         let replies = self
             .session
             .get("stucco/*/info")
+            .target(zenoh::query::QueryTarget::All)
+            .consolidation(zenoh::query::ConsolidationMode::None)
             .timeout(timeout)
             .wait()
             .map_err(z)?;
