@@ -163,3 +163,122 @@ fn two_robots_and_an_operator_through_a_router() {
         r.join().unwrap().unwrap();
     }
 }
+
+/// Under up to 1 s of delay each way, 20% loss, duplication and
+/// reordering between operator and robot, every command of the
+/// vocabulary is carried out exactly once or refused with a reason.
+#[test]
+fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
+    let job = RobotJob {
+        mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
+        name: "r1".to_owned(),
+        link: LinkConfig {
+            listen: vec![endpoint.clone()],
+            ..LinkConfig::default()
+        },
+        speed: 5.0,
+        stop_after_s: Some(900.0),
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let robot = {
+        let stop = stop.clone();
+        std::thread::spawn(move || run_robot(&job, &stop))
+    };
+    std::thread::sleep(Duration::from_millis(500));
+    let peer = LinkConfig {
+        connect: vec![endpoint],
+        ..LinkConfig::default()
+    };
+    // The robot's own events, seen directly, to count what it did.
+    let watcher = Operator::connect(&peer, "watcher").unwrap();
+    let events = watcher.events("r1").unwrap();
+    // The operator talks to the relay only; the relay to the robot.
+    let relay_endpoint = format!(
+        "unixsock-stream/{}",
+        dir.path().join("relay.sock").display()
+    );
+    let relay = stucco_cli::FaultyRelay::start(
+        &LinkConfig {
+            listen: vec![relay_endpoint.clone()],
+            connect: peer.connect.clone(),
+            ..LinkConfig::default()
+        },
+        "faulty",
+        "r1",
+        stucco_cli::Faults {
+            max_delay_s: 1.0,
+            loss: 0.2,
+            duplication: 0.1,
+        },
+        8,
+    )
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let mut op = Operator::connect(
+        &LinkConfig {
+            connect: vec![relay_endpoint],
+            ..LinkConfig::default()
+        },
+        "ann",
+    )
+    .unwrap();
+    // In an order whose outcome is known: standing by, paused and resumed,
+    // a door it does not know, a jog, the wait answered (the mission is
+    // done, so skip is refused), a move and a room map reopen it, stop
+    // pauses the map, abort ends it.
+    let vocabulary = [
+        Command::Status,
+        Command::Pause,
+        Command::Resume,
+        Command::PassDoor { door: 3 },
+        Command::Jog {
+            speed_mps: 0.1,
+            steer_rad: 0.0,
+            ttl_s: 0.3,
+        },
+        Command::Continue,
+        Command::Skip,
+        Command::MoveRelative {
+            dx_m: 0.3,
+            dy_m: 0.0,
+            dtheta_deg: 0.0,
+        },
+        Command::MapRoom,
+        Command::Stop,
+        Command::Abort,
+    ];
+    for command in vocabulary {
+        let r = op.send("faulty", command.clone(), 20.0, None).unwrap();
+        match &r.ack.reply {
+            Reply::Rejected { reason } => assert!(!reason.is_empty()),
+            Reply::Failed { .. } => panic!("{command:?}: {:?}", r.ack),
+            _ => {}
+        }
+        // Let retries still in flight arrive, as they would on a bad link.
+        std::thread::sleep(Duration::from_millis(1500));
+    }
+    std::thread::sleep(Duration::from_secs(2));
+    drop(relay);
+    stop.store(true, Ordering::Relaxed);
+    robot.join().unwrap().unwrap();
+    let mut kinds: Vec<String> = Vec::new();
+    for v in events.drain() {
+        kinds.push(v["event"].as_str().unwrap_or_default().to_owned());
+        if v["event"] == "task_started" {
+            kinds.push(format!(
+                "started {}",
+                v["name"].as_str().unwrap_or_default()
+            ));
+        }
+    }
+    let count = |k: &str| kinds.iter().filter(|x| *x == k).count();
+    // Each task command ran once; pause and stop paused once each, resume
+    // resumed once, abort ended it once.
+    assert_eq!(count("started move_relative"), 1, "{kinds:?}");
+    assert_eq!(count("started map_room"), 1, "{kinds:?}");
+    assert_eq!(count("paused"), 2, "{kinds:?}");
+    assert_eq!(count("resumed"), 1, "{kinds:?}");
+    assert_eq!(count("aborted"), 1, "{kinds:?}");
+}

@@ -30,11 +30,11 @@ pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
 pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
-pub use op::{BenchReport, CommandResult, Operator};
+pub use op::{BenchReport, CommandResult, EventFeed, Operator};
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{RobotJob, RobotState, run_robot};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
-pub use stucco_link::{LinkConfig, Mode as LinkMode, router};
+pub use stucco_link::{Faults, FaultyRelay, LinkConfig, Mode as LinkMode, router};
 pub use task_mission::{
     Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,
     run_task_mission, write_atomic,

@@ -158,6 +158,11 @@ impl Operator {
         })
     }
 
+    /// `robot`'s events from now on; `drain` gives those that came.
+    pub fn events(&self, robot: &str) -> Result<EventFeed> {
+        Ok(EventFeed(self.client.watch(keys::events(robot))?))
+    }
+
     /// One heartbeat to `robot`: the link is up while they come.
     pub fn heartbeat(&self, robot: &str) -> Result<()> {
         Ok(self.client.heartbeat(robot, &self.identity)?)
@@ -223,5 +228,21 @@ impl Operator {
             }
         }
         Ok(())
+    }
+}
+
+/// A robot's events as they come.
+pub struct EventFeed(stucco_link::Subscription);
+
+impl EventFeed {
+    /// The events that came since the last call, as JSON.
+    pub fn drain(&self) -> Vec<serde_json::Value> {
+        let mut out = Vec::new();
+        while let Ok(Some(s)) = self.0.try_recv() {
+            if let Ok(v) = parse::<serde_json::Value>(&s) {
+                out.push(v);
+            }
+        }
+        out
     }
 }

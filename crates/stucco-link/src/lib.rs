@@ -28,6 +28,9 @@ use zenoh::sample::Sample;
 
 pub use zenoh::Session;
 
+/// A subscription's queue of samples.
+pub type Subscription = Subscriber<FifoChannelHandler<Sample>>;
+
 /// Runs a router: a session in router mode that the robots and operators
 /// of a site connect to; it routes until dropped.
 pub fn router(cfg: &LinkConfig) -> Result<Session, LinkError> {
@@ -312,8 +315,10 @@ impl OperatorClient {
         OperatorClient { session }
     }
 
-    /// Sends `t` to `robot` and returns its first reply, retrying every
-    /// `retry` until one comes or `give_up` passes.
+    /// Sends `t` to `robot` and returns its first reply, sending it again
+    /// every `retry` until one comes or `give_up` passes. Earlier tries
+    /// stay open meanwhile: on a slow link the first try's reply may come
+    /// after the second was sent.
     pub fn send(
         &self,
         robot: &str,
@@ -323,29 +328,46 @@ impl OperatorClient {
     ) -> Result<Ack, LinkError> {
         let json = serde_json::to_vec(t).map_err(z)?;
         let key = keys::cmd(robot);
-        let mut tries = 0;
+        let mut tries = Vec::new();
+        let mut next_try = Instant::now();
         while Instant::now() < give_up {
-            tries += 1;
-            let wait = retry.min(give_up.saturating_duration_since(Instant::now()));
-            let replies = self
-                .session
-                .get(&key)
-                .payload(json.clone())
-                .timeout(wait)
-                .wait()
-                .map_err(z)?;
-            while let Ok(Some(reply)) = replies.recv_timeout(wait) {
-                if let Ok(sample) = reply.result() {
-                    let ack = parse::<Ack>(sample)?;
-                    if ack.id == t.id {
-                        return Ok(ack);
+            if Instant::now() >= next_try {
+                let left = give_up.saturating_duration_since(Instant::now());
+                tries.push(
+                    self.session
+                        .get(&key)
+                        .payload(json.clone())
+                        .timeout(left)
+                        .wait()
+                        .map_err(z)?,
+                );
+                next_try = Instant::now() + retry;
+            }
+            for replies in &tries {
+                while let Ok(Some(reply)) = replies.try_recv() {
+                    if let Ok(sample) = reply.result() {
+                        let ack = parse::<Ack>(sample)?;
+                        if ack.id == t.id {
+                            return Ok(ack);
+                        }
                     }
+                }
+            }
+            // The newest try waits a moment for its reply before the next
+            // round of polling.
+            if let Some(last) = tries.last()
+                && let Ok(Some(reply)) = last.recv_timeout(Duration::from_millis(2))
+                && let Ok(sample) = reply.result()
+            {
+                let ack = parse::<Ack>(sample)?;
+                if ack.id == t.id {
+                    return Ok(ack);
                 }
             }
         }
         Err(LinkError::NoReply {
             robot: robot.to_owned(),
-            tries,
+            tries: tries.len(),
         })
     }
 
@@ -402,4 +424,120 @@ pub fn parse<T: serde::de::DeserializeOwned>(sample: &Sample) -> Result<T, LinkE
         key: sample.key_expr().to_string(),
         why: e.to_string(),
     })
+}
+
+/// What a [`FaultyRelay`] does to the messages it carries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Faults {
+    /// Each way, a message waits up to this long (uniformly), s.
+    pub max_delay_s: f64,
+    /// Share of messages lost, each way.
+    pub loss: f64,
+    /// Share of commands sent on twice.
+    pub duplication: f64,
+}
+
+/// A bad link for tests: it carries `stucco/FROM/cmd` queries to
+/// `stucco/TO/cmd` and their replies back, delaying, losing, duplicating
+/// (and so reordering) them, and relays `TO`'s state as `FROM`'s. It stops
+/// when dropped.
+pub struct FaultyRelay {
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl FaultyRelay {
+    /// Starts the relay on its own session joined by `cfg`; `seed` fixes
+    /// its faults' draws.
+    pub fn start(
+        cfg: &LinkConfig,
+        from: &str,
+        to: &str,
+        faults: Faults,
+        seed: u64,
+    ) -> Result<Self, LinkError> {
+        use std::sync::Arc;
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let session = Arc::new(open(cfg)?);
+        let cmd = session
+            .declare_queryable(keys::cmd(from))
+            .wait()
+            .map_err(z)?;
+        let state = session
+            .declare_subscriber(keys::state(to))
+            .wait()
+            .map_err(z)?;
+        let (from, to) = (from.to_owned(), to.to_owned());
+        let stop = Arc::new(AtomicBool::new(false));
+        let halt = stop.clone();
+        // A small deterministic generator (SplitMix64): the faults of a
+        // run are the seed's.
+        let mut x = seed;
+        let mut draw = move || {
+            x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = x;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            (z ^ (z >> 31)) as f64 / u64::MAX as f64
+        };
+        let thread = std::thread::spawn(move || {
+            while !halt.load(Ordering::Relaxed) {
+                while let Ok(Some(s)) = state.try_recv() {
+                    let _ = session.put(keys::state(&from), s.payload().clone()).wait();
+                }
+                let Ok(Some(q)) = cmd.recv_timeout(Duration::from_millis(10)) else {
+                    continue;
+                };
+                let copies = if draw() < faults.duplication { 2 } else { 1 };
+                for _ in 0..copies {
+                    let lose_request = draw() < faults.loss;
+                    let lose_reply = draw() < faults.loss;
+                    let d1 = draw() * faults.max_delay_s;
+                    let d2 = draw() * faults.max_delay_s;
+                    let (session, q, to) = (session.clone(), q.clone(), to.clone());
+                    std::thread::spawn(move || {
+                        std::thread::sleep(Duration::from_secs_f64(d1));
+                        if lose_request {
+                            return;
+                        }
+                        let payload = q
+                            .payload()
+                            .map(|p| p.to_bytes().into_owned())
+                            .unwrap_or_default();
+                        let Ok(replies) = session
+                            .get(keys::cmd(&to))
+                            .payload(payload)
+                            .timeout(Duration::from_secs(3))
+                            .wait()
+                        else {
+                            return;
+                        };
+                        let Ok(Some(reply)) = replies.recv_timeout(Duration::from_secs(3)) else {
+                            return;
+                        };
+                        std::thread::sleep(Duration::from_secs_f64(d2));
+                        if lose_reply {
+                            return;
+                        }
+                        if let Ok(s) = reply.result() {
+                            let _ = q.reply(q.key_expr().clone(), s.payload().clone()).wait();
+                        }
+                    });
+                }
+            }
+        });
+        Ok(FaultyRelay {
+            stop,
+            thread: Some(thread),
+        })
+    }
+}
+
+impl Drop for FaultyRelay {
+    fn drop(&mut self) {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
 }
