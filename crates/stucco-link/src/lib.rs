@@ -353,10 +353,15 @@ impl OperatorClient {
                     }
                 }
             }
-            // The newest try waits a moment for its reply before the next
-            // round of polling.
+            // Wait on the newest try: until the next retry while it is the
+            // only one, a moment when older ones may still answer.
+            let wait = if tries.len() == 1 {
+                next_try.saturating_duration_since(Instant::now())
+            } else {
+                Duration::from_millis(2)
+            };
             if let Some(last) = tries.last()
-                && let Ok(Some(reply)) = last.recv_timeout(Duration::from_millis(2))
+                && let Ok(Some(reply)) = last.recv_timeout(wait)
                 && let Ok(sample) = reply.result()
             {
                 let ack = parse::<Ack>(sample)?;
