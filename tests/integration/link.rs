@@ -282,3 +282,75 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     assert_eq!(count("resumed"), 1, "{kinds:?}");
     assert_eq!(count("aborted"), 1, "{kinds:?}");
 }
+
+/// The operator jogs the robot and vanishes (its session closed): the
+/// robot stops at the jog's time to live, within 0.3 s of it.
+#[test]
+fn a_jog_stops_at_its_time_to_live_when_the_operator_is_gone() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
+    let job = RobotJob {
+        mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
+        name: "r1".to_owned(),
+        link: LinkConfig {
+            listen: vec![endpoint.clone()],
+            ..LinkConfig::default()
+        },
+        speed: 1.0,
+        stop_after_s: Some(600.0),
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let robot = {
+        let stop = stop.clone();
+        std::thread::spawn(move || run_robot(&job, &stop))
+    };
+    std::thread::sleep(Duration::from_millis(500));
+    let peer = LinkConfig {
+        connect: vec![endpoint],
+        ..LinkConfig::default()
+    };
+    let watcher = Operator::connect(&peer, "watcher").unwrap();
+    let states = watcher.states("r1").unwrap();
+    let ttl = 0.5;
+    let accepted_at = {
+        let mut op = Operator::connect(&peer, "ann").unwrap();
+        let r = op
+            .send(
+                "r1",
+                Command::Jog {
+                    speed_mps: 0.1,
+                    steer_rad: 0.0,
+                    ttl_s: ttl,
+                },
+                10.0,
+                None,
+            )
+            .unwrap();
+        assert_eq!(r.ack.reply, Reply::Accepted);
+        r.ack.stamp
+        // The operator's session closes here.
+    };
+    std::thread::sleep(Duration::from_secs(2));
+    let seen = states.drain();
+    stop.store(true, Ordering::Relaxed);
+    robot.join().unwrap().unwrap();
+    // The robot's own clock: the last period it drove, after the jog began.
+    let driving: Vec<i64> = seen
+        .iter()
+        .filter(|s| s["drive"]["speed_mps"].as_f64().is_some_and(|v| v > 0.0))
+        .filter_map(|s| s["stamp"].as_i64())
+        .collect();
+    assert!(!driving.is_empty(), "the jog never drove");
+    let last = stucco_core::Stamp::from_nanos(*driving.iter().max().unwrap());
+    let after_ttl = last.seconds_since(accepted_at) - ttl;
+    println!("the jog's last driving period began {after_ttl:+.3} s from its time to live");
+    assert!(
+        after_ttl <= 0.3,
+        "drove {after_ttl:.3} s past the time to live"
+    );
+    // And nothing drove later.
+    assert!(
+        seen.iter()
+            .any(|s| s["stamp"].as_i64().is_some_and(|t| t > last.as_nanos()))
+    );
+}

@@ -163,6 +163,11 @@ impl Operator {
         Ok(EventFeed(self.client.watch(keys::events(robot))?))
     }
 
+    /// `robot`'s states from now on.
+    pub fn states(&self, robot: &str) -> Result<EventFeed> {
+        Ok(EventFeed(self.client.watch(keys::state(robot))?))
+    }
+
     /// One heartbeat to `robot`: the link is up while they come.
     pub fn heartbeat(&self, robot: &str) -> Result<()> {
         Ok(self.client.heartbeat(robot, &self.identity)?)
@@ -231,11 +236,11 @@ impl Operator {
     }
 }
 
-/// A robot's events as they come.
+/// A robot's events (or states) as they come.
 pub struct EventFeed(stucco_link::Subscription);
 
 impl EventFeed {
-    /// The events that came since the last call, as JSON.
+    /// The messages that came since the last call, as JSON.
     pub fn drain(&self) -> Vec<serde_json::Value> {
         let mut out = Vec::new();
         while let Ok(Some(s)) = self.0.try_recv() {

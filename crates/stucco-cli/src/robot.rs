@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use stucco_control::GainSchedule;
-use stucco_core::{Pose2, Stamp};
+use stucco_core::{DriveCommand, Pose2, Stamp};
 use stucco_link::{LinkConfig, RobotLink};
 use stucco_mission::{BehaviourKind, Executive, ExecutiveConfig, Hazard, Inputs, MissionMode};
 use stucco_sim::{SimConfig, WorldSpec};
@@ -51,6 +51,8 @@ pub struct RobotState<'a> {
     pub position_sigma_m: f64,
     /// What the supervisor holds the robot for.
     pub hazard: Option<Hazard>,
+    /// The drive command going out, after the supervisor.
+    pub drive: DriveCommand,
 }
 
 /// Runs the robot until `stop` is set or the job's time is up; returns the
@@ -131,18 +133,19 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
         );
         link.send_acks(&out.acks)?;
         link.publish_events(&out.events)?;
-        if step.is_multiple_of(5) {
-            link.publish_state(&RobotState {
-                stamp: now,
-                name: &job.name,
-                mission: exec.mode(),
-                task: exec.current_task(),
-                behaviour: exec.current_behaviour(),
-                pose: est.pose,
-                position_sigma_m: est.position_sigma_m,
-                hazard: exec.hazard(),
-            })?;
-        }
+        // State every control period (50 Hz of the robot's time): a
+        // watcher sees a stop when it happens.
+        link.publish_state(&RobotState {
+            stamp: now,
+            name: &job.name,
+            mission: exec.mode(),
+            task: exec.current_task(),
+            behaviour: exec.current_behaviour(),
+            pose: est.pose,
+            position_sigma_m: est.position_sigma_m,
+            hazard: exec.hazard(),
+            drive: out.drive,
+        })?;
         if step.is_multiple_of(50) {
             link.heartbeat(now)?;
         }
