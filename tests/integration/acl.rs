@@ -3,10 +3,8 @@
 //! watch; a viewer may watch, and its commands never reach the robot.
 
 use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
-use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
+use stucco_cli::{LinkConfig, Operator};
 use stucco_core::{Command, Reply};
 
 /// The robot's zenoh configuration: users from `dictionary`, operators
@@ -58,23 +56,15 @@ fn only_operators_may_command_viewers_may_watch() {
     let robot_cfg = dir.path().join("robot.json5");
     std::fs::write(&robot_cfg, robot_config(&dictionary)).unwrap();
     let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    let job = RobotJob {
-        mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
-        name: "r1".to_owned(),
-        link: LinkConfig {
+    let robot = crate::RunningRobot::start(
+        "r1",
+        LinkConfig {
             listen: vec![endpoint.clone()],
             config_file: Some(robot_cfg),
             ..LinkConfig::default()
         },
-        speed: 10.0,
-        stop_after_s: Some(600.0),
-    };
-    let stop = Arc::new(AtomicBool::new(false));
-    let robot = {
-        let stop = stop.clone();
-        std::thread::spawn(move || run_robot(&job, &stop))
-    };
-    std::thread::sleep(Duration::from_millis(500));
+        10.0,
+    );
     let as_user = |user: &str, password: &str| {
         let cfg = dir.path().join(format!("{user}.json5"));
         std::fs::write(&cfg, client_config(user, password)).unwrap();
@@ -114,6 +104,5 @@ fn only_operators_may_command_viewers_may_watch() {
     if let Ok(mut intruder) = as_user("ann", "guess") {
         assert!(intruder.send("r1", Command::Status, 2.0, None).is_err());
     }
-    stop.store(true, Ordering::Relaxed);
-    robot.join().unwrap().unwrap();
+    robot.stop();
 }

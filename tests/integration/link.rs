@@ -2,33 +2,22 @@
 //! process: two sessions over a Unix socket in a temporary folder (never a
 //! fixed TCP port).
 
-use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
-use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
+use stucco_cli::{LinkConfig, Operator};
 use stucco_core::{Command, Reply};
 
 #[test]
 fn an_operator_commands_a_robot_over_zenoh() {
     let dir = tempfile::tempdir().unwrap();
     let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    let job = RobotJob {
-        mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
-        name: "r1".to_owned(),
-        link: LinkConfig {
+    let robot = crate::RunningRobot::start(
+        "r1",
+        LinkConfig {
             listen: vec![endpoint.clone()],
             ..LinkConfig::default()
         },
-        speed: 10.0,
-        stop_after_s: Some(600.0),
-    };
-    let stop = Arc::new(AtomicBool::new(false));
-    let robot = {
-        let stop = stop.clone();
-        std::thread::spawn(move || run_robot(&job, &stop))
-    };
-    std::thread::sleep(Duration::from_millis(500));
+        10.0,
+    );
     let mut op = Operator::connect(
         &LinkConfig {
             connect: vec![endpoint],
@@ -100,8 +89,7 @@ fn an_operator_commands_a_robot_over_zenoh() {
             .is_some_and(|r| r.contains("link")),
         "{state}"
     );
-    stop.store(true, Ordering::Relaxed);
-    robot.join().unwrap().unwrap();
+    robot.stop();
 }
 
 /// A site: a router, two robots and an operator connected to it as
@@ -123,20 +111,9 @@ fn two_robots_and_an_operator_through_a_router() {
         connect: vec![endpoint],
         ..LinkConfig::default()
     };
-    let stop = Arc::new(AtomicBool::new(false));
     let robots: Vec<_> = ["r1", "r2"]
         .into_iter()
-        .map(|name| {
-            let job = RobotJob {
-                mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
-                name: name.to_owned(),
-                link: client.clone(),
-                speed: 10.0,
-                stop_after_s: Some(600.0),
-            };
-            let stop = stop.clone();
-            std::thread::spawn(move || run_robot(&job, &stop))
-        })
+        .map(|name| crate::RunningRobot::start(name, client.clone(), 10.0))
         .collect();
     std::thread::sleep(Duration::from_millis(800));
     let mut op = Operator::connect(&client, "ann").unwrap();
@@ -158,9 +135,8 @@ fn two_robots_and_an_operator_through_a_router() {
         )
         .unwrap();
     assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done));
-    stop.store(true, Ordering::Relaxed);
     for r in robots {
-        r.join().unwrap().unwrap();
+        r.stop();
     }
 }
 
@@ -171,22 +147,14 @@ fn two_robots_and_an_operator_through_a_router() {
 fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    let job = RobotJob {
-        mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
-        name: "r1".to_owned(),
-        link: LinkConfig {
+    let robot = crate::RunningRobot::start(
+        "r1",
+        LinkConfig {
             listen: vec![endpoint.clone()],
             ..LinkConfig::default()
         },
-        speed: 5.0,
-        stop_after_s: Some(900.0),
-    };
-    let stop = Arc::new(AtomicBool::new(false));
-    let robot = {
-        let stop = stop.clone();
-        std::thread::spawn(move || run_robot(&job, &stop))
-    };
-    std::thread::sleep(Duration::from_millis(500));
+        5.0,
+    );
     let peer = LinkConfig {
         connect: vec![endpoint],
         ..LinkConfig::default()
@@ -261,8 +229,7 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     }
     std::thread::sleep(Duration::from_secs(2));
     drop(relay);
-    stop.store(true, Ordering::Relaxed);
-    robot.join().unwrap().unwrap();
+    robot.stop();
     let mut kinds: Vec<String> = Vec::new();
     for v in events.drain() {
         kinds.push(v["event"].as_str().unwrap_or_default().to_owned());
@@ -289,22 +256,14 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
 fn a_jog_stops_at_its_time_to_live_when_the_operator_is_gone() {
     let dir = tempfile::tempdir().unwrap();
     let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    let job = RobotJob {
-        mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/robot.toml"),
-        name: "r1".to_owned(),
-        link: LinkConfig {
+    let robot = crate::RunningRobot::start(
+        "r1",
+        LinkConfig {
             listen: vec![endpoint.clone()],
             ..LinkConfig::default()
         },
-        speed: 1.0,
-        stop_after_s: Some(600.0),
-    };
-    let stop = Arc::new(AtomicBool::new(false));
-    let robot = {
-        let stop = stop.clone();
-        std::thread::spawn(move || run_robot(&job, &stop))
-    };
-    std::thread::sleep(Duration::from_millis(500));
+        1.0,
+    );
     let peer = LinkConfig {
         connect: vec![endpoint],
         ..LinkConfig::default()
@@ -332,8 +291,7 @@ fn a_jog_stops_at_its_time_to_live_when_the_operator_is_gone() {
     };
     std::thread::sleep(Duration::from_secs(2));
     let seen = states.drain();
-    stop.store(true, Ordering::Relaxed);
-    robot.join().unwrap().unwrap();
+    robot.stop();
     // The robot's own clock: the last period it drove, after the jog began.
     let driving: Vec<i64> = seen
         .iter()

@@ -19,3 +19,57 @@ fn run_mission_file(name: &str, runs: Option<u64>) -> anyhow::Result<stucco_cli:
         runs,
     })
 }
+
+/// A `stucco robot` standing by (`missions/robot.toml`) in a thread, on
+/// `link`, its simulated time `speed` times the wall clock; it stops when
+/// [`RunningRobot::stop`] is called (or when dropped).
+pub struct RunningRobot {
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    thread: Option<std::thread::JoinHandle<anyhow::Result<f64>>>,
+}
+
+impl RunningRobot {
+    /// Starts robot `name` and gives it half a second to join the network.
+    pub fn start(name: &str, link: stucco_cli::LinkConfig, speed: f64) -> Self {
+        let job = stucco_cli::RobotJob {
+            mission: std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../missions/robot.toml"),
+            name: name.to_owned(),
+            link,
+            speed,
+            stop_after_s: Some(900.0),
+        };
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let thread = {
+            let stop = stop.clone();
+            std::thread::spawn(move || stucco_cli::run_robot(&job, &stop))
+        };
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        RunningRobot {
+            stop,
+            thread: Some(thread),
+        }
+    }
+
+    /// Stops it and checks it ran without error.
+    pub fn stop(mut self) {
+        self.halt().unwrap();
+    }
+
+    fn halt(&mut self) -> anyhow::Result<()> {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| anyhow::anyhow!("the robot panicked"))?
+                .map(|_| ()),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for RunningRobot {
+    fn drop(&mut self) {
+        let _ = self.halt();
+    }
+}
