@@ -4,9 +4,13 @@
 //! table is `deny_unknown_fields`; errors name the file, line and column.
 
 use anyhow::Result;
+use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use stucco_mission::{SafetyConfig, TaskSpec};
+use stucco_control::GainSchedule;
+use stucco_core::Pose2;
+use stucco_mission::{Executive, ExecutiveConfig, SafetyConfig, TaskSpec};
+use stucco_sim::{SimConfig, WorldSpec};
 
 /// Input that cannot be used as it is (a mission file, a checkpoint):
 /// `stucco run` exits with 2 on it.
@@ -82,6 +86,22 @@ pub struct StartKnowledge {
 
 fn start_sigma() -> f64 {
     0.02
+}
+
+impl StartKnowledge {
+    /// The room filter's first state for a robot put at `at` (room frame):
+    /// off by the start's uncertainty (`pose_sigma_m` along x and against
+    /// y, 0.01 rad in heading), the room as planned.
+    pub fn filter_start(&self, at: &Pose2) -> SVector<f64, 5> {
+        let off = self.pose_sigma_m;
+        SVector::<f64, 5>::new(
+            at.x + off,
+            at.y - off,
+            at.theta + 0.01,
+            self.room_m[0],
+            self.room_m[1],
+        )
+    }
 }
 
 fn one() -> u64 {
@@ -282,6 +302,31 @@ impl Mission {
             }
         }
         None
+    }
+
+    /// The mission's world (from `mission_path`'s folder), its people
+    /// removed when the mission closes the site to them.
+    pub fn load_world(&self, mission_path: &Path) -> Result<WorldSpec> {
+        let mut world = WorldSpec::load(&self.world_path(mission_path))
+            .map_err(|e| BadInput(format!("the world of {}: {e:#}", mission_path.display())))?;
+        if !self.people {
+            world.people.clear();
+        }
+        Ok(world)
+    }
+
+    /// The executive for the mission's tasks, its failsafe, the simulated
+    /// robot; `unattended` when no operator is there to answer.
+    pub fn executive(&self, unattended: bool) -> Executive {
+        Executive::new(
+            ExecutiveConfig {
+                vehicle: SimConfig::default().vehicle,
+                gains: GainSchedule::default(),
+                safety: self.failsafe.clone(),
+                unattended,
+            },
+            self.tasks.clone(),
+        )
     }
 
     /// The world file, resolved against the mission file's folder.

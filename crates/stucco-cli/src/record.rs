@@ -24,12 +24,8 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
-use stucco_control::GainSchedule;
 use stucco_core::{DriveCommand, Pose2, Stamp, Telecommand};
-use stucco_mission::{
-    Estimate, Event, Executive, ExecutiveConfig, Inputs, OperatorCommand, Progress,
-};
-use stucco_sim::SimConfig;
+use stucco_mission::{Estimate, Event, Executive, Inputs, OperatorCommand, Progress};
 
 /// The `/mission` message.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -244,15 +240,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                     serde_json::from_slice(&m.data).map_err(|_| json("/mission"))?;
                 let mission = Mission::parse(&r.text, Path::new(&r.path))?;
                 name = mission.name.clone();
-                let mut e = Executive::new(
-                    ExecutiveConfig {
-                        vehicle: SimConfig::default().vehicle,
-                        gains: GainSchedule::default(),
-                        safety: mission.failsafe.clone(),
-                        unattended: true,
-                    },
-                    mission.tasks.clone(),
-                );
+                let mut e = mission.executive(true);
                 if let Some(p) = &r.resumed_from {
                     e.resume_from(p).map_err(|e| bad(e.to_string()))?;
                 }

@@ -3,18 +3,17 @@
 
 use crate::mission::{BadInput, Mission};
 use crate::navigator::{DT_S, Navigator};
+use crate::task_mission::RoomFrame;
 use anyhow::{Context, Result};
-use nalgebra::SVector;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use stucco_control::GainSchedule;
 use stucco_core::{DriveCommand, Pose2, Stamp};
 use stucco_link::{LinkConfig, RobotLink};
-use stucco_mission::{BehaviourKind, Executive, ExecutiveConfig, Hazard, Inputs, MissionMode};
-use stucco_sim::{SimConfig, WorldSpec};
+use stucco_mission::{BehaviourKind, Hazard, Inputs, MissionMode};
+use stucco_sim::Layout;
 
 /// What `stucco robot` was asked to do.
 #[derive(Clone, Debug)]
@@ -63,41 +62,22 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
         .start
         .clone()
         .ok_or_else(|| BadInput(format!("{}: no [start]", job.mission.display())))?;
-    let world_path = mission.world_path(&job.mission);
-    let mut world = WorldSpec::load(&world_path)
-        .map_err(|e| BadInput(format!("the world of {}: {e:#}", job.mission.display())))?;
-    if !mission.people {
-        world.people.clear();
-    }
+    let world = mission.load_world(&job.mission)?;
     if !(job.speed.is_finite() && job.speed > 0.0) {
         return Err(BadInput("--speed: a positive number".to_owned()).into());
     }
-    // The room frame is the world's when the room's corner is at the origin
-    // (the worlds shipped); the robot is put at the world's start.
-    let s = Pose2::new(
+    // The robot is put at the world's start, in the room frame of the room
+    // it stands in.
+    let start = Pose2::new(
         world.robot.at[0],
         world.robot.at[1],
         world.robot.heading_deg.to_radians(),
     );
-    let off = known.pose_sigma_m;
-    let x0 = SVector::<f64, 5>::new(
-        s.x + off,
-        s.y - off,
-        s.theta + 0.01,
-        known.room_m[0],
-        known.room_m[1],
-    );
+    let frame = RoomFrame::of(&Layout::of(&world), &start)?;
+    let x0 = known.filter_start(&frame.to_room(&start));
     let mut nav = Navigator::new(&world, mission.seed, x0, [known.room_sigma_m; 2])?;
     nav.discover_doors(true);
-    let mut exec = Executive::new(
-        ExecutiveConfig {
-            vehicle: SimConfig::default().vehicle,
-            gains: GainSchedule::default(),
-            safety: mission.failsafe.clone(),
-            unattended: false,
-        },
-        mission.tasks.clone(),
-    );
+    let mut exec = mission.executive(false);
     let session = stucco_link::open(&job.link).context("joining the zenoh network")?;
     let mut link = RobotLink::new(&session, &job.name)?;
     let t0 = Instant::now();

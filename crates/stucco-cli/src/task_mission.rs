@@ -15,13 +15,12 @@ use std::hash::Hasher;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use stucco_control::GainSchedule;
 use stucco_core::{Pose2, Stamp, wrap_angle};
 use stucco_mission::{
-    BehaviourKind, DoorEstimate, Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode,
-    Progress, TaskSpec, TaskStatus, WallGeometry, WallName,
+    BehaviourKind, DoorEstimate, Event, EventKind, Executive, Inputs, MissionMode, Progress,
+    TaskSpec, TaskStatus, WallGeometry, WallName,
 };
-use stucco_sim::{Layout, OpeningKind, SimConfig, WorldSpec};
+use stucco_sim::{Layout, OpeningKind, WorldSpec};
 
 /// What `stucco run` was asked to do with a task mission.
 #[derive(Clone, Debug)]
@@ -291,12 +290,7 @@ pub fn run_task_mission(
     if mission.tasks.is_empty() {
         return Err(BadInput(format!("{}: no [[task]] in it", job.mission.display())).into());
     }
-    let world_path = mission.world_path(&job.mission);
-    let mut world = WorldSpec::load(&world_path)
-        .map_err(|e| BadInput(format!("the world of {}: {e:#}", job.mission.display())))?;
-    if !mission.people {
-        world.people.clear();
-    }
+    let world = mission.load_world(&job.mission)?;
     let runs = job.runs.unwrap_or(mission.runs);
     if runs == 0 {
         return Err(BadInput(format!("{}: runs: at least one", job.mission.display())).into());
@@ -370,19 +364,38 @@ pub fn run_task_mission(
     Ok(summary)
 }
 
-/// The true room the robot starts in: its south-west corner (the room
-/// frame's origin) and its size.
-fn true_room(layout: &Layout, start: &Pose2) -> Result<([f64; 2], [f64; 2])> {
-    let room = layout
-        .rooms
-        .iter()
-        .find(|r| {
-            let (lo, hi) = bounds(&r.corners);
-            (lo[0]..=hi[0]).contains(&start.x) && (lo[1]..=hi[1]).contains(&start.y)
+/// The room a robot at `at` (world frame) stands in, as the simulator
+/// knows it: its name, its south-west corner (the origin of the room frame
+/// the robot's filter keeps) and its size.
+pub(crate) struct RoomFrame {
+    pub name: String,
+    pub origin: [f64; 2],
+    pub size_m: [f64; 2],
+}
+
+impl RoomFrame {
+    /// The room of `layout` holding `at`.
+    pub(crate) fn of(layout: &Layout, at: &Pose2) -> Result<RoomFrame> {
+        let room = layout
+            .rooms
+            .iter()
+            .find(|r| {
+                let (lo, hi) = bounds(&r.corners);
+                (lo[0]..=hi[0]).contains(&at.x) && (lo[1]..=hi[1]).contains(&at.y)
+            })
+            .ok_or_else(|| BadInput(format!("the robot's start {at:?} is in no room")))?;
+        let (lo, hi) = bounds(&room.corners);
+        Ok(RoomFrame {
+            name: room.name.clone(),
+            origin: lo,
+            size_m: [hi[0] - lo[0], hi[1] - lo[1]],
         })
-        .ok_or_else(|| BadInput(format!("the robot's start {start:?} is in no room")))?;
-    let (lo, hi) = bounds(&room.corners);
-    Ok((lo, [hi[0] - lo[0], hi[1] - lo[1]]))
+    }
+
+    /// `p` (world frame) in the room frame.
+    pub(crate) fn to_room(&self, p: &Pose2) -> Pose2 {
+        Pose2::new(p.x - self.origin[0], p.y - self.origin[1], p.theta)
+    }
 }
 
 fn bounds(points: &[Point2<f64>]) -> ([f64; 2], [f64; 2]) {
@@ -435,8 +448,9 @@ fn run_once(
         world.robot.heading_deg.to_radians(),
     );
     // The room is the one the robot was put in at the start.
-    let (origin, room_true) = true_room(&layout, &world_start)?;
-    let to_room = |p: &Pose2| Pose2::new(p.x - origin[0], p.y - origin[1], p.theta);
+    let frame = RoomFrame::of(&layout, &world_start)?;
+    let (origin, room_true) = (frame.origin, frame.size_m);
+    let to_room = |p: &Pose2| frame.to_room(p);
     let known = mission
         .start
         .as_ref()
@@ -454,20 +468,10 @@ fn run_once(
             )
         }
         // Where it was put, off by a known amount, the room as planned.
-        None => {
-            let s = to_room(&world_start);
-            let off = known.pose_sigma_m;
-            (
-                SVector::<f64, 5>::new(
-                    s.x + off,
-                    s.y - off,
-                    s.theta + 0.01,
-                    known.room_m[0],
-                    known.room_m[1],
-                ),
-                [known.room_sigma_m; 2],
-            )
-        }
+        None => (
+            known.filter_start(&to_room(&world_start)),
+            [known.room_sigma_m; 2],
+        ),
     };
     let mut nav = Navigator::new(&world, seed, x0, size_sigma)?;
     if let Some(cp) = resume {
@@ -476,16 +480,7 @@ fn run_once(
         }
     }
     nav.discover_doors(true);
-    let vehicle = SimConfig::default().vehicle;
-    let mut exec = Executive::new(
-        ExecutiveConfig {
-            vehicle,
-            gains: GainSchedule::default(),
-            safety: mission.failsafe.clone(),
-            unattended: true,
-        },
-        mission.tasks.clone(),
-    );
+    let mut exec = mission.executive(true);
     if let Some(cp) = resume {
         exec.resume_from(&cp.progress)
             .map_err(|e| BadInput(format!("the checkpoint does not fit the mission: {e}")))?;
@@ -690,20 +685,12 @@ fn run_once(
         })
         .collect();
     // True windows of the room, in the room frame: wall, along-range, z.
-    let room_name = layout
-        .rooms
-        .iter()
-        .find(|r| {
-            let (lo, hi) = bounds(&r.corners);
-            (lo[0]..=hi[0]).contains(&world_start.x) && (lo[1]..=hi[1]).contains(&world_start.y)
-        })
-        .map(|r| r.name.clone())
-        .unwrap_or_default();
     let true_windows: Vec<(WallName, [f64; 2], [f64; 2])> = layout
         .openings
         .iter()
         .filter(|o| {
-            o.room == room_name && matches!(o.kind, OpeningKind::Window | OpeningKind::GlazedWindow)
+            o.room == frame.name
+                && matches!(o.kind, OpeningKind::Window | OpeningKind::GlazedWindow)
         })
         .filter_map(|o| {
             let e: Vec<nalgebra::Vector2<f64>> = o
