@@ -6,26 +6,30 @@ use std::time::Duration;
 use stucco_cli::{LinkConfig, Operator};
 use stucco_core::{Command, Reply};
 
-#[test]
-fn an_operator_commands_a_robot_over_zenoh() {
-    let dir = tempfile::tempdir().unwrap();
-    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
+/// Robot `r1` standing by on a Unix socket in `dir`, and the link
+/// configuration of a peer connecting to it.
+fn robot_on_socket(dir: &std::path::Path, speed: f64) -> (crate::RunningRobot, LinkConfig) {
+    let endpoint = format!("unixsock-stream/{}", dir.join("z.sock").display());
     let robot = crate::RunningRobot::start(
         "r1",
         LinkConfig {
             listen: vec![endpoint.clone()],
             ..LinkConfig::default()
         },
-        10.0,
+        speed,
     );
-    let mut op = Operator::connect(
-        &LinkConfig {
-            connect: vec![endpoint],
-            ..LinkConfig::default()
-        },
-        "ann",
-    )
-    .unwrap();
+    let peer = LinkConfig {
+        connect: vec![endpoint],
+        ..LinkConfig::default()
+    };
+    (robot, peer)
+}
+
+#[test]
+fn an_operator_commands_a_robot_over_zenoh() {
+    let dir = tempfile::tempdir().unwrap();
+    let (robot, peer) = robot_on_socket(dir.path(), 10.0);
+    let mut op = Operator::connect(&peer, "ann").unwrap();
     assert_eq!(op.list().unwrap(), ["r1"]);
     // A harmless query: done at once.
     let r = op.send("r1", Command::Status, 10.0, None).unwrap();
@@ -146,19 +150,7 @@ fn two_robots_and_an_operator_through_a_router() {
 #[test]
 fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    let robot = crate::RunningRobot::start(
-        "r1",
-        LinkConfig {
-            listen: vec![endpoint.clone()],
-            ..LinkConfig::default()
-        },
-        5.0,
-    );
-    let peer = LinkConfig {
-        connect: vec![endpoint],
-        ..LinkConfig::default()
-    };
+    let (robot, peer) = robot_on_socket(dir.path(), 5.0);
     // The robot's own events, seen directly, to count what it did.
     let watcher = Operator::connect(&peer, "watcher").unwrap();
     let events = watcher.events("r1").unwrap();
@@ -255,19 +247,7 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
 #[test]
 fn a_jog_stops_at_its_time_to_live_when_the_operator_is_gone() {
     let dir = tempfile::tempdir().unwrap();
-    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    let robot = crate::RunningRobot::start(
-        "r1",
-        LinkConfig {
-            listen: vec![endpoint.clone()],
-            ..LinkConfig::default()
-        },
-        1.0,
-    );
-    let peer = LinkConfig {
-        connect: vec![endpoint],
-        ..LinkConfig::default()
-    };
+    let (robot, peer) = robot_on_socket(dir.path(), 1.0);
     let watcher = Operator::connect(&peer, "watcher").unwrap();
     let states = watcher.states("r1").unwrap();
     let ttl = 0.5;

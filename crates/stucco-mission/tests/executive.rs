@@ -60,6 +60,41 @@ impl Robot {
     }
 }
 
+/// What the robot sees and hears in one tick, besides its estimate.
+#[derive(Default)]
+struct Seen<'a> {
+    obstacles: &'a [Point2<f64>],
+    estop: bool,
+    operator: &'a [OperatorCommand],
+    telecommands: &'a [Telecommand],
+}
+
+/// One tick of `exec` on `robot`'s estimate (the robot is not moved).
+fn ask(exec: &mut Executive, robot: &Robot, seen: Seen) -> Outputs {
+    let est = robot.estimate();
+    exec.tick(
+        robot.now,
+        &Inputs {
+            estimate: &est,
+            obstacles: seen.obstacles,
+            bumper: false,
+            estop: seen.estop,
+            operator: seen.operator,
+            telecommands: seen.telecommands,
+        },
+    )
+}
+
+/// A straight move of `dx_m` at 0.3 m/s.
+fn forward(dx_m: f64) -> TaskSpec {
+    TaskSpec::MoveRelative {
+        dx_m,
+        dy_m: 0.0,
+        dtheta_deg: 0.0,
+        speed_mps: 0.3,
+    }
+}
+
 fn executive(tasks: Vec<TaskSpec>, unattended: bool) -> Executive {
     Executive::new(
         ExecutiveConfig {
@@ -82,17 +117,13 @@ fn run(
     let mut events = Vec::new();
     let steps = (seconds / DT) as usize;
     for _ in 0..steps {
-        let est = robot.estimate();
         let ops = operator(robot.now, exec);
-        let out = exec.tick(
-            robot.now,
-            &Inputs {
-                estimate: &est,
-                obstacles: &[],
-                bumper: false,
-                estop: false,
+        let out = ask(
+            exec,
+            robot,
+            Seen {
                 operator: &ops,
-                telecommands: &[],
+                ..Seen::default()
             },
         );
         events.extend(out.events);
@@ -159,18 +190,7 @@ fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
     let mut farthest = 0.0f64;
     let steps = (120.0 / DT) as usize;
     for _ in 0..steps {
-        let est = robot.estimate();
-        let out = exec.tick(
-            robot.now,
-            &Inputs {
-                estimate: &est,
-                obstacles: &[],
-                bumper: false,
-                estop: false,
-                operator: &[],
-                telecommands: &[],
-            },
-        );
+        let out = ask(&mut exec, &robot, Seen { ..Seen::default() });
         // The pass proper: from `from_m` on, the standoff holds.
         if matches!(
             exec.current_behaviour(),
@@ -246,12 +266,7 @@ fn waiting_tasks() -> Vec<TaskSpec> {
             timeout_s: None,
             on_timeout: OnTimeout::Fail,
         },
-        TaskSpec::MoveRelative {
-            dx_m: 0.5,
-            dy_m: 0.0,
-            dtheta_deg: 0.0,
-            speed_mps: 0.3,
-        },
+        forward(0.5),
         TaskSpec::WaitForOperator {
             prompt: "again?".to_owned(),
             timeout_s: Some(2.0),
@@ -326,20 +341,7 @@ fn skip_and_abort_leave_the_progress_as_they_say() {
 
 #[test]
 fn a_resumed_mission_never_does_a_finished_task_again() {
-    let tasks = vec![
-        TaskSpec::MoveRelative {
-            dx_m: 0.5,
-            dy_m: 0.0,
-            dtheta_deg: 0.0,
-            speed_mps: 0.3,
-        },
-        TaskSpec::MoveRelative {
-            dx_m: 0.5,
-            dy_m: 0.0,
-            dtheta_deg: 0.0,
-            speed_mps: 0.3,
-        },
-    ];
+    let tasks = vec![forward(0.5), forward(0.5)];
     let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
     let mut exec = executive(tasks.clone(), true);
     // Stopped (aborted) while the second task is under way.
@@ -379,32 +381,20 @@ fn a_resumed_mission_never_does_a_finished_task_again() {
 #[test]
 fn an_obstacle_stops_the_robot_and_a_lasting_one_fails_the_task() {
     let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
-    let mut exec = executive(
-        vec![TaskSpec::MoveRelative {
-            dx_m: 2.0,
-            dy_m: 0.0,
-            dtheta_deg: 0.0,
-            speed_mps: 0.3,
-        }],
-        true,
-    );
+    let mut exec = executive(vec![forward(2.0)], true);
     // A person standing 1.5 m ahead of the start, in the robot's frame as
     // it moves.
     let person = Point2::new(2.5 + 0.2, 1.5);
     let mut stopped_at = None;
     let mut events = Vec::new();
     for _ in 0..(60.0 / DT) as usize {
-        let est = robot.estimate();
         let seen = [robot.pose.inverse().transform_point(&person)];
-        let out = exec.tick(
-            robot.now,
-            &Inputs {
-                estimate: &est,
+        let out = ask(
+            &mut exec,
+            &robot,
+            Seen {
                 obstacles: &seen,
-                bumper: false,
-                estop: false,
-                operator: &[],
-                telecommands: &[],
+                ..Seen::default()
             },
         );
         if exec.hazard() == Some(Hazard::Obstacle) && stopped_at.is_none() {
@@ -431,33 +421,22 @@ fn an_obstacle_stops_the_robot_and_a_lasting_one_fails_the_task() {
 #[test]
 fn the_estop_stops_at_once_and_waits_for_release_and_resume() {
     let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
-    let mut exec = executive(
-        vec![TaskSpec::MoveRelative {
-            dx_m: 2.0,
-            dy_m: 0.0,
-            dtheta_deg: 0.0,
-            speed_mps: 0.3,
-        }],
-        false,
-    );
+    let mut exec = executive(vec![forward(2.0)], false);
     let mut pressed = false;
     for k in 0..(60.0 / DT) as usize {
-        let est = robot.estimate();
         let estop = (100..200).contains(&k);
         let ops = if k == 250 {
             vec![OperatorCommand::Resume]
         } else {
             Vec::new()
         };
-        let out = exec.tick(
-            robot.now,
-            &Inputs {
-                estimate: &est,
-                obstacles: &[],
-                bumper: false,
+        let out = ask(
+            &mut exec,
+            &robot,
+            Seen {
                 estop,
                 operator: &ops,
-                telecommands: &[],
+                ..Seen::default()
             },
         );
         if estop {
@@ -479,16 +458,12 @@ fn the_estop_stops_at_once_and_waits_for_release_and_resume() {
     // Unattended, the e-stop ends the mission.
     let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
     let mut exec = executive(waiting_tasks(), true);
-    let est = robot.estimate();
-    let out = exec.tick(
-        robot.now,
-        &Inputs {
-            estimate: &est,
-            obstacles: &[],
-            bumper: false,
+    let out = ask(
+        &mut exec,
+        &robot,
+        Seen {
             estop: true,
-            operator: &[],
-            telecommands: &[],
+            ..Seen::default()
         },
     );
     robot.drive(out.drive);
@@ -517,18 +492,7 @@ fn map_room_drives_loops_until_the_room_is_known() {
         // The size is learnt on the second loop (a stand-in for the
         // filter, which the simulator tests exercise).
         robot.room_sigma = [if loops_seen >= 2 { 0.002 } else { 0.05 }; 2];
-        let est = robot.estimate();
-        let out = exec.tick(
-            robot.now,
-            &Inputs {
-                estimate: &est,
-                obstacles: &[],
-                bumper: false,
-                estop: false,
-                operator: &[],
-                telecommands: &[],
-            },
-        );
+        let out = ask(&mut exec, &robot, Seen { ..Seen::default() });
         loops_seen += out
             .events
             .iter()
@@ -562,16 +526,12 @@ fn command(id: &str, at: Stamp, command: Command) -> Telecommand {
 
 /// One tick with `telecommands`; the outputs.
 fn tick_with(exec: &mut Executive, robot: &mut Robot, telecommands: &[Telecommand]) -> Outputs {
-    let est = robot.estimate();
-    let out = exec.tick(
-        robot.now,
-        &Inputs {
-            estimate: &est,
-            obstacles: &[],
-            bumper: false,
-            estop: false,
-            operator: &[],
+    let out = ask(
+        exec,
+        robot,
+        Seen {
             telecommands,
+            ..Seen::default()
         },
     );
     robot.drive(out.drive);
@@ -681,15 +641,7 @@ fn retries_are_answered_but_carried_out_once_and_stale_or_impossible_commands_re
 #[test]
 fn stop_acts_in_the_same_tick_and_a_jog_ends_at_its_time_to_live() {
     let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
-    let mut exec = executive(
-        vec![TaskSpec::MoveRelative {
-            dx_m: 2.0,
-            dy_m: 0.0,
-            dtheta_deg: 0.0,
-            speed_mps: 0.3,
-        }],
-        false,
-    );
+    let mut exec = executive(vec![forward(2.0)], false);
     for _ in 0..100 {
         tick_with(&mut exec, &mut robot, &[]);
     }
@@ -879,12 +831,7 @@ fn a_lost_link_stops_a_jog_and_pauses_by_default() {
                 },
                 unattended: false,
             },
-            vec![TaskSpec::MoveRelative {
-                dx_m: 2.0,
-                dy_m: 0.0,
-                dtheta_deg: 0.0,
-                speed_mps: 0.3,
-            }],
+            vec![forward(2.0)],
         );
         exec.link(robot.now, true);
         for _ in 0..50 {
