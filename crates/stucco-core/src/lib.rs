@@ -32,6 +32,7 @@ mod operator;
 mod platform;
 mod pose;
 mod scan;
+mod spray;
 mod stamp;
 mod text;
 mod vehicle;
@@ -41,6 +42,10 @@ pub use operator::{Ack, Command, Reply, Side, Telecommand, WallName};
 pub use platform::{DriveCommand, EncoderSample, Platform, RangeProfile, Readings};
 pub use pose::{Pose2, Twist2, wrap_angle};
 pub use scan::{Beam, Scan};
+pub use spray::{
+    Aim, FOOTPRINT_REACH_SIGMAS, SurfaceFrame, SurfaceHit, ThicknessGrid, ToolCommand, normal_cdf,
+    path_density,
+};
 pub use stamp::{ParseStampError, Stamp};
 pub use text::line_column;
 pub use vehicle::VehicleSpec;

@@ -1,0 +1,46 @@
+//! Cost of planning a room and of predicting its coat.
+#![allow(clippy::expect_used)]
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use stucco_core::{Pose2, VehicleSpec, WallName};
+use stucco_plan::{OpeningKind, RoomModel, SprayTool, WallOpening, plan, predicted_score};
+
+fn living_room() -> RoomModel {
+    RoomModel {
+        size_m: [5.0, 2.85],
+        height_m: 2.6,
+        openings: vec![
+            WallOpening {
+                wall: WallName::South,
+                kind: OpeningKind::Window,
+                along_m: [2.0, 3.2],
+                sill_head_m: [0.9, 2.1],
+            },
+            WallOpening {
+                wall: WallName::East,
+                kind: OpeningKind::Door,
+                along_m: [1.0, 1.9],
+                sill_head_m: [0.0, 2.0],
+            },
+        ],
+        obstacles: Vec::new(),
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let room = living_room();
+    let tool = SprayTool::default();
+    let v = VehicleSpec::default();
+    let start = Pose2::new(2.5, 1.4, 0.0);
+    c.bench_function("plan living room", |b| {
+        b.iter(|| plan(black_box(&room), &tool, &v, &start))
+    });
+    let p = plan(&room, &tool, &v, &start).expect("plan");
+    c.bench_function("predict living room", |b| {
+        b.iter(|| predicted_score(black_box(&p)))
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

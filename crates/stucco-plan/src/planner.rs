@@ -1,0 +1,1160 @@
+//! Coverage planning: where the robot stands (stations) and what the nozzle
+//! does there (passes of strokes), so every plasterable part of every
+//! surface gets one even coat, and what cannot be reached is said so.
+//!
+//! Walls are coated with vertical strokes: the robot stands parallel to
+//! the wall at its standoff, the wall on its left, and the gantry moves the
+//! nozzle up and down the wall, stepping along the rail between strokes.
+//! Strokes are spaced evenly along the whole wall (≤ 1.5 σ apart), with a
+//! stroke where the band it coats ends `spray_off_m` short of each opening,
+//! so the coat is even across stations and full up to every opening's
+//! margin; a stroke crossing an opening stops spraying `spray_off_m` before
+//! it and starts again past it. The ceiling is coated with strokes along the room's x
+//! axis from the same stations (the nozzle turned up, the arm reaching
+//! across) and from lanes down the middle where the walls' stations do not
+//! reach; where one station's share of a stroke ends the next one's
+//! begins, so their edges add up to the full coat.
+//!
+//! Reach is honest: a part of a surface no station can reach (behind a
+//! sofa, under a radiator, too high for the lift) is not planned and is
+//! reported with its area.
+
+use crate::surface::{RoomModel, Surface, SurfaceId, WallLine};
+use crate::{PlanError, Rect, SprayTool};
+use serde::{Deserialize, Serialize};
+use stucco_core::{Aim, Pose2, VehicleSpec, WallName};
+
+/// Side of the cells of reach masks and predicted thickness, m.
+pub const PLAN_CELL_M: f64 = 0.02;
+
+/// Where a station stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Lane {
+    /// Along a wall at the robot's standoff, the wall on the left.
+    Wall(WallName),
+    /// Down the middle of the room, heading east, `n`-th from the south.
+    Middle(usize),
+}
+
+/// One move of the nozzle's aim point over a surface, at constant speed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Move {
+    /// Start, in the surface's frame, m.
+    pub from_m: [f64; 2],
+    /// End, m.
+    pub to_m: [f64; 2],
+    /// Speed, m/s.
+    pub speed_mps: f64,
+    /// Plaster flowing.
+    pub spray: bool,
+}
+
+impl Move {
+    /// Length, m.
+    pub fn length_m(&self) -> f64 {
+        (self.to_m[0] - self.from_m[0]).hypot(self.to_m[1] - self.from_m[1])
+    }
+
+    /// Duration, s.
+    pub fn duration_s(&self) -> f64 {
+        self.length_m() / self.speed_mps
+    }
+
+    /// The aim point `t_s` seconds into the move.
+    pub fn at(&self, t_s: f64) -> [f64; 2] {
+        let d = self.duration_s();
+        let f = if d > 0.0 {
+            (t_s / d).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        [
+            self.from_m[0] + f * (self.to_m[0] - self.from_m[0]),
+            self.from_m[1] + f * (self.to_m[1] - self.from_m[1]),
+        ]
+    }
+}
+
+/// The nozzle's work on one surface from one station.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pass {
+    /// The surface.
+    pub surface: SurfaceId,
+    /// Where the nozzle points.
+    pub aim: Aim,
+    /// Its moves, one after the other.
+    pub moves: Vec<Move>,
+}
+
+impl Pass {
+    /// Duration, s.
+    pub fn duration_s(&self) -> f64 {
+        self.moves.iter().map(Move::duration_s).sum()
+    }
+
+    /// Time spent spraying, s.
+    pub fn spray_s(&self) -> f64 {
+        self.moves
+            .iter()
+            .filter(|m| m.spray)
+            .map(Move::duration_s)
+            .sum()
+    }
+}
+
+/// Where the robot stands and what it sprays from there.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Station {
+    /// What it stands along.
+    pub lane: Lane,
+    /// The rear axle's pose, room frame.
+    pub base: Pose2,
+    /// The passes, in order.
+    pub passes: Vec<Pass>,
+}
+
+/// Which cells of a surface the plan reaches (the plasterable ones among
+/// them are to be coated).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReachMask {
+    /// The surface.
+    pub surface: SurfaceId,
+    /// Side of a cell, m.
+    pub cell_m: f64,
+    /// Cells along `u` and `v`.
+    pub cells: [usize; 2],
+    /// Reached, row by row (`v` major).
+    pub reached: Vec<bool>,
+}
+
+impl ReachMask {
+    /// True when the point `uv` lies in a reached cell; outside the mask,
+    /// false.
+    pub fn reaches(&self, uv: [f64; 2]) -> bool {
+        let i = (uv[0] / self.cell_m).floor();
+        let j = (uv[1] / self.cell_m).floor();
+        if i < 0.0 || j < 0.0 {
+            return false;
+        }
+        let (i, j) = (i as usize, j as usize);
+        i < self.cells[0] && j < self.cells[1] && self.reached[j * self.cells[0] + i]
+    }
+}
+
+/// Plasterable area no station reaches.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Unreachable {
+    /// The surface.
+    pub surface: SurfaceId,
+    /// Its area, m².
+    pub area_m2: f64,
+    /// A rectangle around it, in the surface's frame.
+    pub bounds: Rect,
+}
+
+/// A plastering plan for one room.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    /// The tool it was made for.
+    pub tool: SprayTool,
+    /// The room it was made on.
+    pub room: RoomModel,
+    /// The room's surfaces.
+    pub surfaces: Vec<Surface>,
+    /// Stations in the order the robot visits them.
+    pub stations: Vec<Station>,
+    /// What each surface's stations reach, in [`Plan::surfaces`] order.
+    pub reach: Vec<ReachMask>,
+    /// Plasterable parts no station reaches.
+    pub unreachable: Vec<Unreachable>,
+}
+
+impl Plan {
+    /// The surface `id`.
+    pub fn surface(&self, id: SurfaceId) -> Option<&Surface> {
+        self.surfaces.iter().find(|s| s.id == id)
+    }
+
+    /// The reach of surface `id`.
+    pub fn reach_of(&self, id: SurfaceId) -> Option<&ReachMask> {
+        self.reach.iter().find(|r| r.surface == id)
+    }
+
+    /// Time the nozzle spends spraying, s.
+    pub fn spray_s(&self) -> f64 {
+        self.passes().map(|(_, p)| p.spray_s()).sum()
+    }
+
+    /// Every pass with the index of its station.
+    pub fn passes(&self) -> impl Iterator<Item = (usize, &Pass)> {
+        self.stations
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| s.passes.iter().map(move |p| (i, p)))
+    }
+
+    /// Where the nozzle sits for aim point `uv` on `surface`, in the room
+    /// frame.
+    pub fn nozzle_point(&self, surface: SurfaceId, uv: [f64; 2]) -> Option<nalgebra::Point3<f64>> {
+        let s = self.surface(surface)?;
+        let standoff = if s.is_ceiling() {
+            self.tool.ceiling_standoff_m
+        } else {
+            self.tool.wall_standoff_m
+        };
+        Some(s.nozzle_point(uv, standoff, &self.room))
+    }
+}
+
+/// Plans the coating of every wall and the ceiling of `room` with `tool`
+/// on a robot of `vehicle`, starting from `start` (the rear axle's pose in
+/// the room frame).
+pub fn plan(
+    room: &RoomModel,
+    tool: &SprayTool,
+    vehicle: &VehicleSpec,
+    start: &Pose2,
+) -> Result<Plan, PlanError> {
+    tool.validate(vehicle.width_m)?;
+    if !(room.size_m[0] > 0.0 && room.size_m[1] > 0.0 && room.height_m > 0.0) {
+        return Err(PlanError::Room(format!(
+            "a room {:?} m and {} m high has no surfaces",
+            room.size_m, room.height_m
+        )));
+    }
+    let ceiling_z = room.height_m - tool.ceiling_standoff_m;
+    if ceiling_z > tool.lift_m[1] || ceiling_z < tool.lift_m[0] {
+        return Err(PlanError::Room(format!(
+            "the ceiling at {:.2} m needs the nozzle at {ceiling_z:.2} m; the lift reaches \
+             {:.2}..{:.2} m",
+            room.height_m, tool.lift_m[0], tool.lift_m[1]
+        )));
+    }
+    let planner = Planner {
+        room,
+        tool,
+        body: Body::of(vehicle),
+    };
+    let surfaces = room.surfaces();
+    let mut lanes: Vec<(Lane, Vec<Station>)> = Vec::new();
+    for surface in surfaces.iter().filter(|s| !s.is_ceiling()) {
+        let SurfaceId::Wall(w) = surface.id else {
+            continue;
+        };
+        let stations = planner.wall(w, surface);
+        lanes.push((Lane::Wall(w), stations));
+    }
+    // The ceiling from the walls' stations, then lanes where they fall
+    // short.
+    let strokes = planner.ceiling_lines();
+    let mut reach_rects: Vec<Rect> = lanes
+        .iter()
+        .flat_map(|(_, st)| st.iter().map(|s| planner.ceiling_reach(&s.base)))
+        .collect();
+    let mut middle = 0;
+    for band in planner.uncovered_bands(&strokes, &reach_rects) {
+        for (lane, stations) in planner.middle_lanes(band, &mut middle) {
+            reach_rects.extend(stations.iter().map(|s| planner.ceiling_reach(&s.base)));
+            lanes.push((lane, stations));
+        }
+    }
+    let ordered = order_lanes(lanes, start);
+    let mut stations = ordered;
+    planner.ceiling_passes(&mut stations, &strokes);
+
+    let mut reach = Vec::new();
+    let mut unreachable = Vec::new();
+    for surface in &surfaces {
+        let bands: Vec<Rect> = stations
+            .iter()
+            .flat_map(|s| s.passes.iter())
+            .filter(|p| p.surface == surface.id)
+            .flat_map(|p| p.moves.iter().filter(|m| m.spray))
+            .map(|m| band(m, tool))
+            .collect();
+        let mask = reach_mask(surface, &bands, tool);
+        if let Some(u) = lost_area(surface, &mask, tool) {
+            unreachable.push(u);
+        }
+        reach.push(mask);
+    }
+    Ok(Plan {
+        tool: tool.clone(),
+        room: room.clone(),
+        surfaces,
+        stations,
+        reach,
+        unreachable,
+    })
+}
+
+/// The robot's footprint, in its own frame.
+#[derive(Clone, Copy, Debug)]
+struct Body {
+    /// From and to along x, m.
+    x_m: [f64; 2],
+    /// Half its width, m.
+    half_width_m: f64,
+}
+
+impl Body {
+    fn of(v: &VehicleSpec) -> Body {
+        Body {
+            x_m: [-v.rear_overhang_m, v.length_m - v.rear_overhang_m],
+            half_width_m: v.width_m / 2.0,
+        }
+    }
+}
+
+/// The box of room-frame points covered by the robot-frame box
+/// `x × y` at `pose` (headings here are multiples of 90°).
+fn room_box(pose: &Pose2, x: [f64; 2], y: [f64; 2]) -> [[f64; 2]; 2] {
+    let mut lo = [f64::MAX; 2];
+    let mut hi = [f64::MIN; 2];
+    for px in x {
+        for py in y {
+            let p = pose.transform_point(&nalgebra::Point2::new(px, py));
+            lo = [lo[0].min(p.x), lo[1].min(p.y)];
+            hi = [hi[0].max(p.x), hi[1].max(p.y)];
+        }
+    }
+    [lo, hi]
+}
+
+struct Planner<'a> {
+    room: &'a RoomModel,
+    tool: &'a SprayTool,
+    body: Body,
+}
+
+/// Step of the search for stations' bases, m.
+const BASE_STEP_M: f64 = 0.01;
+
+impl Planner<'_> {
+    /// True when the robot can stand at `pose`: its body, grown by the
+    /// clearance, inside the room and clear of every obstacle.
+    fn free(&self, pose: &Pose2) -> bool {
+        let c = self.tool.clearance_m;
+        let b = self.body;
+        let [lo, hi] = room_box(pose, b.x_m, [-b.half_width_m, b.half_width_m]);
+        let [xs, ys] = self.room.size_m;
+        if lo[0] < c - 1e-9 || lo[1] < c - 1e-9 || hi[0] > xs - c + 1e-9 || hi[1] > ys - c + 1e-9 {
+            return false;
+        }
+        !self.room.obstacles.iter().any(|o| {
+            lo[0] < o.max_m[0] + c
+                && hi[0] > o.min_m[0] - c
+                && lo[1] < o.max_m[1] + c
+                && hi[1] > o.min_m[1] - c
+        })
+    }
+
+    /// The stations along wall `w`, far end first.
+    fn wall(&self, w: WallName, surface: &Surface) -> Vec<Station> {
+        let tool = self.tool;
+        let line = WallLine::of(w, self.room.size_m);
+        let heading = line.heading_wall_left();
+        let sgn = line
+            .along
+            .dot(&nalgebra::Vector2::new(heading.cos(), heading.sin()));
+        let [length, height] = surface.size_m();
+        let pose_at = |u: f64| {
+            let p = line.point(u, tool.robot_standoff_m);
+            Pose2::new(p.x, p.y, heading)
+        };
+        // Positions t = sgn·u of the feasible bases.
+        let n = ((length + 2.0) / BASE_STEP_M).ceil() as i64;
+        let feasible: Vec<f64> = (0..=n)
+            .map(|k| -1.0 + k as f64 * BASE_STEP_M)
+            .filter(|&u| self.free(&pose_at(u)))
+            .map(|u| sgn * u)
+            .collect();
+        let gap = tool.surface_gap_m;
+        let clip = |t: [f64; 2]| -> Option<[f64; 2]> {
+            // t-interval → u-interval clipped to the wall.
+            let (a, b) = (sgn * t[0], sgn * t[1]);
+            let (a, b) = (a.min(b).max(gap), a.max(b).min(length - gap));
+            (b > a).then_some([a, b])
+        };
+        let x = tool.rail_m;
+        let reach_of = |t: f64| clip([t + x[0], t + x[1]]);
+        let lift = [
+            tool.lift_m[0].max(tool.skirting_m - tool.ramp_m()),
+            tool.lift_m[1].min(height - gap),
+        ];
+        // Nozzle along the wall: union of the reaches, as intervals.
+        let mut spans: Vec<[f64; 2]> = feasible.iter().filter_map(|&t| reach_of(t)).collect();
+        spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let mut merged: Vec<[f64; 2]> = Vec::new();
+        for s in spans {
+            match merged.last_mut() {
+                Some(m) if s[0] <= m[1] + 1e-9 => m[1] = m[1].max(s[1]),
+                _ => merged.push(s),
+            }
+        }
+        // Obstacles between the wall and the body: the nozzle cannot go
+        // below their tops there.
+        let corridor = tool.robot_standoff_m - self.body.half_width_m;
+        let low_blocks: Vec<([f64; 2], f64)> = self
+            .room
+            .obstacles
+            .iter()
+            .filter_map(|o| {
+                let corners = [
+                    o.min_m,
+                    o.max_m,
+                    [o.min_m[0], o.max_m[1]],
+                    [o.max_m[0], o.min_m[1]],
+                ];
+                let d = corners
+                    .iter()
+                    .map(|c| {
+                        line.inward
+                            .dot(&(nalgebra::Vector2::new(c[0], c[1]) - line.origin))
+                    })
+                    .fold(f64::MAX, f64::min);
+                let u: Vec<f64> = corners
+                    .iter()
+                    .map(|c| {
+                        line.along
+                            .dot(&(nalgebra::Vector2::new(c[0], c[1]) - line.origin))
+                    })
+                    .collect();
+                let (u0, u1) = u
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+                (d < corridor).then_some(([u0, u1], o.height_m + tool.clearance_m))
+            })
+            .collect();
+        let strokes = self.wall_strokes(&merged, surface, lift, &low_blocks);
+        // Stations, far end first: each covers the farthest strokes left.
+        let mut left: Vec<(f64, Vec<[f64; 2]>, f64)> = strokes;
+        left.sort_by(|a, b| (sgn * b.0).total_cmp(&(sgn * a.0)));
+        let mut stations = Vec::new();
+        // Each station's reach runs on to where the last one's began, so
+        // together they reach the ceiling along the wall without a gap.
+        let mut reached_from: Option<f64> = None;
+        while let Some(first) = left.first() {
+            let t1 = sgn * first.0;
+            let covering = |reach_to: f64| {
+                feasible
+                    .iter()
+                    .copied()
+                    .filter(move |&t| t + x[1] >= reach_to - 1e-9 && t + x[0] <= t1 + 1e-9)
+                    .min_by(|a, b| a.total_cmp(b))
+            };
+            let Some(tb) = reached_from.and_then(covering).or_else(|| covering(t1)) else {
+                // Cannot happen: every stroke lies in some base's reach.
+                left.remove(0);
+                continue;
+            };
+            let lo = tb + x[0] - 1e-9;
+            reached_from = Some(tb + x[0]);
+            let k = left.iter().take_while(|s| sgn * s.0 >= lo).count();
+            let mine: Vec<_> = left.drain(..k).collect();
+            let base = pose_at(sgn * tb);
+            stations.push(Station {
+                lane: Lane::Wall(w),
+                base,
+                passes: vec![self.wall_pass(surface.id, &mine)],
+            });
+        }
+        stations
+    }
+
+    /// The strokes of a wall: `(u, pieces of v sprayed, speed)`.
+    fn wall_strokes(
+        &self,
+        spans: &[[f64; 2]],
+        surface: &Surface,
+        lift: [f64; 2],
+        low_blocks: &[([f64; 2], f64)],
+    ) -> Vec<(f64, Vec<[f64; 2]>, f64)> {
+        let tool = self.tool;
+        let so = tool.spray_off_m;
+        // A stroke beside an opening coats a band half a spacing wide
+        // toward it: that band, not the stroke, stops `spray_off_m` short.
+        let beside = so + tool.stroke_spacing_m() / 2.0;
+        let mut out = Vec::new();
+        for span in spans {
+            let mut keys = vec![span[0], span[1]];
+            for o in &surface.openings {
+                for k in [o.rect.u_m[0] - beside, o.rect.u_m[1] + beside] {
+                    if k > span[0] && k < span[1] {
+                        keys.push(k);
+                    }
+                }
+            }
+            keys.sort_by(f64::total_cmp);
+            keys.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+            let mut us = vec![keys[0]];
+            for pair in keys.windows(2) {
+                let n = ((pair[1] - pair[0]) / tool.stroke_spacing_m())
+                    .ceil()
+                    .max(1.0);
+                for i in 1..=n as usize {
+                    us.push(pair[0] + (pair[1] - pair[0]) * i as f64 / n);
+                }
+            }
+            for (i, &u) in us.iter().enumerate() {
+                let width = match (i.checked_sub(1).map(|j| us[j]), us.get(i + 1)) {
+                    (Some(a), Some(&b)) => (b - a) / 2.0,
+                    (Some(a), None) => u - a,
+                    (None, Some(&b)) => b - u,
+                    (None, None) => tool.stroke_spacing_m(),
+                };
+                let mut pieces = vec![lift];
+                for o in &surface.openings {
+                    if u > o.rect.u_m[0] - beside + 1e-9 && u < o.rect.u_m[1] + beside - 1e-9 {
+                        cut(&mut pieces, [o.rect.v_m[0] - so, o.rect.v_m[1] + so]);
+                    }
+                }
+                for (bu, top) in low_blocks {
+                    if u >= bu[0] && u <= bu[1] {
+                        cut(&mut pieces, [f64::MIN, *top]);
+                    }
+                }
+                if !pieces.is_empty() {
+                    out.push((u, pieces, tool.stroke_speed_mps(width)));
+                }
+            }
+        }
+        out
+    }
+
+    /// A station's pass over its wall strokes, in the order given,
+    /// alternately up and down.
+    fn wall_pass(&self, surface: SurfaceId, strokes: &[(f64, Vec<[f64; 2]>, f64)]) -> Pass {
+        let lines: Vec<Line> = strokes
+            .iter()
+            .map(|(u, pieces, speed)| Line {
+                pieces: pieces.iter().map(|p| ([*u, p[0]], [*u, p[1]])).collect(),
+                speed_mps: *speed,
+            })
+            .collect();
+        Pass {
+            surface,
+            aim: Aim::Left,
+            moves: self.boustrophedon(&lines),
+        }
+    }
+
+    /// Moves over lines taken alternately forward and backward, with the
+    /// spray off between pieces.
+    fn boustrophedon(&self, lines: &[Line]) -> Vec<Move> {
+        let mut moves: Vec<Move> = Vec::new();
+        let axis = self.tool.axis_speed_mps;
+        let mut at: Option<[f64; 2]> = None;
+        for (i, line) in lines.iter().enumerate() {
+            let mut pieces: Vec<([f64; 2], [f64; 2])> = line.pieces.clone();
+            if i % 2 == 1 {
+                pieces.reverse();
+                for p in &mut pieces {
+                    *p = (p.1, p.0);
+                }
+            }
+            for (from, to) in pieces {
+                if let Some(a) = at
+                    && (a[0] - from[0]).hypot(a[1] - from[1]) > 1e-9
+                {
+                    moves.push(Move {
+                        from_m: a,
+                        to_m: from,
+                        speed_mps: axis,
+                        spray: false,
+                    });
+                }
+                moves.push(Move {
+                    from_m: from,
+                    to_m: to,
+                    speed_mps: line.speed_mps,
+                    spray: true,
+                });
+                at = Some(to);
+            }
+        }
+        moves
+    }
+
+    /// The ceiling's strokes: lines along x at these y, m, with their
+    /// speed.
+    fn ceiling_lines(&self) -> (Vec<f64>, f64) {
+        let gap = self.tool.surface_gap_m;
+        let [xs, ys] = self.room.size_m;
+        let _ = xs;
+        let span = ys - 2.0 * gap;
+        let n = (span / self.tool.stroke_spacing_m()).ceil().max(1.0) as usize;
+        let spacing = span / n as f64;
+        let ys: Vec<f64> = (0..=n).map(|i| gap + spacing * i as f64).collect();
+        (ys, self.tool.stroke_speed_mps(spacing))
+    }
+
+    /// The part of the ceiling the nozzle reaches from `base`.
+    fn ceiling_reach(&self, base: &Pose2) -> Rect {
+        let gap = self.tool.surface_gap_m;
+        let [xs, ys] = self.room.size_m;
+        let [lo, hi] = room_box(base, self.tool.rail_m, self.tool.arm_m);
+        Rect {
+            u_m: [lo[0].max(gap), hi[0].min(xs - gap)],
+            v_m: [lo[1].max(gap), hi[1].min(ys - gap)],
+        }
+    }
+
+    /// The bands of y (lowest and highest stroke) that stations reaching
+    /// `rects` leave partly uncovered.
+    fn uncovered_bands(&self, strokes: &(Vec<f64>, f64), rects: &[Rect]) -> Vec<[f64; 2]> {
+        let gap = self.tool.surface_gap_m;
+        let xs = self.room.size_m[0];
+        let open: Vec<f64> = strokes
+            .0
+            .iter()
+            .copied()
+            .filter(|&y| {
+                let mut spans: Vec<[f64; 2]> = rects
+                    .iter()
+                    .filter(|r| y >= r.v_m[0] - 1e-9 && y <= r.v_m[1] + 1e-9)
+                    .map(|r| r.u_m)
+                    .collect();
+                spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
+                let mut x = gap;
+                for s in spans {
+                    if s[0] > x + 1e-6 {
+                        return true;
+                    }
+                    x = x.max(s[1]);
+                }
+                x < xs - gap - 1e-6
+            })
+            .collect();
+        let spacing = strokes.0.get(1).map_or(1.0, |b| b - strokes.0[0]);
+        let mut bands: Vec<[f64; 2]> = Vec::new();
+        for y in open {
+            match bands.last_mut() {
+                Some(b) if y - b[1] < 1.5 * spacing => b[1] = y,
+                _ => bands.push([y, y]),
+            }
+        }
+        bands
+    }
+
+    /// Lanes heading east down the middle of the room whose arms reach
+    /// the band of y, each with its stations (east end first).
+    fn middle_lanes(&self, band: [f64; 2], next: &mut usize) -> Vec<(Lane, Vec<Station>)> {
+        let tool = self.tool;
+        let [a0, a1] = tool.arm_m;
+        let reach = a1 - a0;
+        let gap = tool.surface_gap_m;
+        let xs = self.room.size_m[0];
+        let mut out = Vec::new();
+        let mut y_lo = band[0];
+        while y_lo <= band[1] + 1e-9 {
+            // Heading east, the arm reaches y + a0 .. y + a1.
+            let y = y_lo - a0;
+            let pose_at = |x: f64| Pose2::new(x, y, 0.0);
+            let n = ((xs + 2.0) / BASE_STEP_M).ceil() as i64;
+            let feasible: Vec<f64> = (0..=n)
+                .map(|k| -1.0 + k as f64 * BASE_STEP_M)
+                .filter(|&x| self.free(&pose_at(x)))
+                .collect();
+            let x = tool.rail_m;
+            let mut stations = Vec::new();
+            let mut tf = xs - gap;
+            while tf > gap + 1e-6 {
+                // A station must reach tf and leave less to do.
+                let pick = feasible
+                    .iter()
+                    .filter(|&&t| t + x[1] >= tf - 1e-9 && t + x[0] < tf - 1e-6)
+                    .min_by(|a, b| a.total_cmp(b));
+                match pick {
+                    Some(&tb) => {
+                        stations.push(Station {
+                            lane: Lane::Middle(*next),
+                            base: pose_at(tb),
+                            passes: Vec::new(),
+                        });
+                        tf = tb + x[0];
+                    }
+                    None => tf -= BASE_STEP_M,
+                }
+            }
+            if !stations.is_empty() {
+                out.push((Lane::Middle(*next), stations));
+                *next += 1;
+            }
+            y_lo += reach;
+        }
+        out
+    }
+
+    /// Shares every ceiling stroke among the stations that reach it, the
+    /// earliest first, and gives each its ceiling pass.
+    fn ceiling_passes(&self, stations: &mut [Station], strokes: &(Vec<f64>, f64)) {
+        let rects: Vec<Rect> = stations
+            .iter()
+            .map(|s| self.ceiling_reach(&s.base))
+            .collect();
+        let mut lines: Vec<Vec<Line>> = vec![Vec::new(); stations.len()];
+        for &y in &strokes.0 {
+            let mut taken: Vec<[f64; 2]> = Vec::new();
+            for (k, r) in rects.iter().enumerate() {
+                if y < r.v_m[0] - 1e-9 || y > r.v_m[1] + 1e-9 {
+                    continue;
+                }
+                let mut free = vec![r.u_m];
+                for t in &taken {
+                    cut(&mut free, *t);
+                }
+                if free.is_empty() {
+                    continue;
+                }
+                lines[k].push(Line {
+                    pieces: free.iter().map(|p| ([p[0], y], [p[1], y])).collect(),
+                    speed_mps: strokes.1,
+                });
+                taken.push(r.u_m);
+            }
+        }
+        for (station, lines) in stations.iter_mut().zip(lines) {
+            if !lines.is_empty() {
+                station.passes.push(Pass {
+                    surface: SurfaceId::Ceiling,
+                    aim: Aim::Up,
+                    moves: self.boustrophedon(&lines),
+                });
+            }
+        }
+    }
+}
+
+/// A stroke: pieces sprayed along one line, at one speed.
+#[derive(Clone, Debug)]
+struct Line {
+    pieces: Vec<([f64; 2], [f64; 2])>,
+    speed_mps: f64,
+}
+
+/// Removes `hole` from the sorted, disjoint intervals `spans`.
+fn cut(spans: &mut Vec<[f64; 2]>, hole: [f64; 2]) {
+    let mut out = Vec::with_capacity(spans.len() + 1);
+    for s in spans.iter() {
+        if hole[1] <= s[0] || hole[0] >= s[1] {
+            out.push(*s);
+            continue;
+        }
+        if hole[0] > s[0] {
+            out.push([s[0], hole[0]]);
+        }
+        if hole[1] < s[1] {
+            out.push([hole[1], s[1]]);
+        }
+    }
+    out.retain(|s| s[1] - s[0] > 1e-9);
+    *spans = out;
+}
+
+/// Lanes in the order of a greedy tour from `start`: always the lane whose
+/// first station is nearest the last one visited.
+fn order_lanes(mut lanes: Vec<(Lane, Vec<Station>)>, start: &Pose2) -> Vec<Station> {
+    lanes.retain(|(_, s)| !s.is_empty());
+    let mut out = Vec::new();
+    let mut at = start.position();
+    while !lanes.is_empty() {
+        let next = lanes
+            .iter()
+            .enumerate()
+            .map(|(i, (_, s))| (i, (s[0].base.position() - at).norm()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(i, _)| i);
+        let (_, stations) = lanes.remove(next);
+        if let Some(last) = stations.last() {
+            at = last.base.position();
+        }
+        out.extend(stations);
+    }
+    out
+}
+
+/// The band of a surface a spraying move coats: its path widened across
+/// by the width its speed lays the coat over (and half a cell, so bands of
+/// neighbouring strokes at uneven spacing leave no sliver between them).
+fn band(m: &Move, tool: &SprayTool) -> Rect {
+    let half = tool.area_rate_m2ps() / m.speed_mps / 2.0 + PLAN_CELL_M / 2.0;
+    let (u, v) = (
+        [m.from_m[0].min(m.to_m[0]), m.from_m[0].max(m.to_m[0])],
+        [m.from_m[1].min(m.to_m[1]), m.from_m[1].max(m.to_m[1])],
+    );
+    if u[1] - u[0] < v[1] - v[0] {
+        Rect {
+            u_m: [u[0] - half, u[1] + half],
+            v_m: v,
+        }
+    } else {
+        Rect {
+            u_m: u,
+            v_m: [v[0] - half, v[1] + half],
+        }
+    }
+}
+
+/// The cells of `surface` the coat reaches in full: those inside the
+/// `bands` the strokes coat, less a ramp wherever the bands end on
+/// plasterable ground (where they end at an edge or an opening's margin,
+/// the margin takes the ramp).
+fn reach_mask(surface: &Surface, bands: &[Rect], tool: &SprayTool) -> ReachMask {
+    let [su, sv] = surface.size_m();
+    let nu = ((su / PLAN_CELL_M).ceil() as usize).max(1);
+    let nv = ((sv / PLAN_CELL_M).ceil() as usize).max(1);
+    let center = |i: usize, j: usize| {
+        [
+            (i as f64 + 0.5) * PLAN_CELL_M,
+            (j as f64 + 0.5) * PLAN_CELL_M,
+        ]
+    };
+    let inside: Vec<bool> = (0..nv)
+        .flat_map(|j| (0..nu).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let p = center(i, j);
+            !surface.plasterable(p, tool) || bands.iter().any(|r| r.contains(p))
+        })
+        .collect();
+    let r = (tool.ramp_m() / PLAN_CELL_M).ceil() as i64;
+    let mut reached = vec![false; nu * nv];
+    for j in 0..nv as i64 {
+        for i in 0..nu as i64 {
+            let mut ok = true;
+            'n: for dj in -r..=r {
+                for di in -r..=r {
+                    if di * di + dj * dj > r * r {
+                        continue;
+                    }
+                    let (a, b) = (i + di, j + dj);
+                    if a < 0 || b < 0 || a >= nu as i64 || b >= nv as i64 {
+                        continue;
+                    }
+                    if !inside[b as usize * nu + a as usize] {
+                        ok = false;
+                        break 'n;
+                    }
+                }
+            }
+            reached[j as usize * nu + i as usize] = ok;
+        }
+    }
+    ReachMask {
+        surface: surface.id,
+        cell_m: PLAN_CELL_M,
+        cells: [nu, nv],
+        reached,
+    }
+}
+
+/// The plasterable area of `surface` its mask leaves out, if any.
+fn lost_area(surface: &Surface, mask: &ReachMask, tool: &SprayTool) -> Option<Unreachable> {
+    let mut area = 0.0;
+    let mut bounds = Rect {
+        u_m: [f64::MAX, f64::MIN],
+        v_m: [f64::MAX, f64::MIN],
+    };
+    let c = mask.cell_m;
+    for j in 0..mask.cells[1] {
+        for i in 0..mask.cells[0] {
+            let p = [(i as f64 + 0.5) * c, (j as f64 + 0.5) * c];
+            if surface.plasterable(p, tool) && !mask.reached[j * mask.cells[0] + i] {
+                area += c * c;
+                bounds.u_m = [
+                    bounds.u_m[0].min(p[0] - c / 2.0),
+                    bounds.u_m[1].max(p[0] + c / 2.0),
+                ];
+                bounds.v_m = [
+                    bounds.v_m[0].min(p[1] - c / 2.0),
+                    bounds.v_m[1].max(p[1] + c / 2.0),
+                ];
+            }
+        }
+    }
+    (area > 0.0).then_some(Unreachable {
+        surface: surface.id,
+        area_m2: area,
+        bounds,
+    })
+}
+
+#[cfg(test)]
+#[allow(clippy::expect_used)]
+mod tests {
+    use super::*;
+    use crate::surface::{Obstacle, OpeningKind, WallOpening};
+    use crate::{Surface, predicted_score};
+    use proptest::prelude::*;
+
+    fn tool() -> SprayTool {
+        SprayTool::default()
+    }
+
+    fn room(size_m: [f64; 2], height_m: f64, openings: Vec<WallOpening>) -> RoomModel {
+        RoomModel {
+            size_m,
+            height_m,
+            openings,
+            obstacles: Vec::new(),
+        }
+    }
+
+    fn make(r: &RoomModel) -> Plan {
+        let start = Pose2::new(r.size_m[0] / 2.0, r.size_m[1] / 2.0, 0.0);
+        plan(r, &tool(), &VehicleSpec::default(), &start).expect("a plan")
+    }
+
+    /// True when the axis-aligned segment `a → b` enters the open
+    /// rectangle `r`.
+    fn crosses(a: [f64; 2], b: [f64; 2], r: &Rect) -> bool {
+        let (u0, u1) = (a[0].min(b[0]), a[0].max(b[0]));
+        let (v0, v1) = (a[1].min(b[1]), a[1].max(b[1]));
+        u1 > r.u_m[0] && u0 < r.u_m[1] && v1 > r.v_m[0] && v0 < r.v_m[1]
+    }
+
+    /// Every aim point lies on its surface, every spraying move stays
+    /// `spray_off_m` clear of the openings, and the nozzle reaches every
+    /// aim point from its station with the gantry's travel.
+    fn check_moves(p: &Plan) {
+        let t = &p.tool;
+        for station in &p.stations {
+            for pass in &station.passes {
+                let s: &Surface = p.surface(pass.surface).expect("surface");
+                let [su, sv] = s.size_m();
+                for m in &pass.moves {
+                    for q in [m.from_m, m.to_m] {
+                        assert!(q[0] >= -1e-9 && q[0] <= su + 1e-9, "{q:?} off {:?}", s.id);
+                        assert!(q[1] >= -1e-9 && q[1] <= sv + 1e-9, "{q:?} off {:?}", s.id);
+                        let n = p.nozzle_point(pass.surface, q).expect("nozzle");
+                        let local = station
+                            .base
+                            .inverse()
+                            .transform_point(&nalgebra::Point2::new(n.x, n.y));
+                        let e = 1e-6;
+                        assert!(
+                            local.x >= t.rail_m[0] - e && local.x <= t.rail_m[1] + e,
+                            "{local:?}"
+                        );
+                        assert!(
+                            local.y >= t.arm_m[0] - e && local.y <= t.arm_m[1] + e,
+                            "{local:?}"
+                        );
+                        assert!(n.z >= t.lift_m[0] - e && n.z <= t.lift_m[1] + e, "{n:?}");
+                    }
+                    if m.spray {
+                        for o in &s.openings {
+                            let keep = o.rect.grown(t.spray_off_m - 1e-6);
+                            assert!(!crosses(m.from_m, m.to_m, &keep), "{m:?} sprays {o:?}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_bare_room_is_coated_evenly_all_over() {
+        let p = make(&room([4.0, 3.0], 2.5, Vec::new()));
+        check_moves(&p);
+        assert!(p.unreachable.is_empty(), "{:?}", p.unreachable);
+        let s = predicted_score(&p);
+        assert!(s.wall_coverage_pct >= 99.9, "{s:?}");
+        assert!(s.ceiling_coverage_pct >= 99.9, "{s:?}");
+        assert!(s.thickness_cv <= 0.02, "{s:?}");
+        assert_eq!(s.overspray_pct, 0.0);
+        // Every plasterable square metre is sprayed once: what left the
+        // nozzle is the coat times the area, plus what the strokes lay
+        // past the plasterable edges.
+        let area: f64 = s.surfaces.iter().map(|x| x.plasterable_m2).sum();
+        let coat_l = area * tool().thickness_m() * 1000.0;
+        assert!(
+            s.sprayed_l > coat_l && s.sprayed_l < 1.15 * coat_l,
+            "{} {coat_l}",
+            s.sprayed_l
+        );
+    }
+
+    #[test]
+    fn strokes_stop_short_of_windows_and_doors() {
+        let openings = vec![
+            WallOpening {
+                wall: WallName::South,
+                kind: OpeningKind::Window,
+                along_m: [1.3, 2.5],
+                sill_head_m: [0.9, 2.1],
+            },
+            WallOpening {
+                wall: WallName::East,
+                kind: OpeningKind::Door,
+                along_m: [0.4, 1.3],
+                sill_head_m: [0.0, 2.0],
+            },
+        ];
+        let p = make(&room([4.0, 3.0], 2.6, openings));
+        check_moves(&p);
+        let s = predicted_score(&p);
+        assert!(s.wall_coverage_pct >= 99.9, "{s:?}");
+        assert!(s.overspray_pct <= 0.5 && s.overspray_pct > 0.0, "{s:?}");
+    }
+
+    #[test]
+    fn what_furniture_hides_is_reported_not_dropped() {
+        // A sofa along the west wall, 0.9 m deep, 0.8 m high: the robot
+        // cannot stand at the west wall, and the wall behind it is
+        // unreachable; a radiator on the south wall keeps the nozzle above
+        // its top there.
+        let mut r = room([5.0, 3.0], 2.6, Vec::new());
+        r.obstacles = vec![
+            Obstacle {
+                min_m: [0.0, 0.6],
+                max_m: [0.9, 2.6],
+                height_m: 0.8,
+            },
+            Obstacle {
+                min_m: [2.0, 0.04],
+                max_m: [3.0, 0.14],
+                height_m: 0.6,
+            },
+        ];
+        let p = make(&r);
+        check_moves(&p);
+        let body = Body::of(&VehicleSpec::default());
+        for s in &p.stations {
+            let [lo, hi] = room_box(&s.base, body.x_m, [-body.half_width_m, body.half_width_m]);
+            assert!(hi[0] <= 0.0 || lo[0] >= 0.9 + 0.12 - 1e-9 || lo[1] >= 2.6 || hi[1] <= 0.6);
+        }
+        let west = p
+            .unreachable
+            .iter()
+            .find(|u| u.surface == SurfaceId::Wall(WallName::West))
+            .expect("the west wall behind the sofa");
+        // The sofa spans y 0.6–2.6 of the 3 m wall: most of the wall.
+        assert!(west.area_m2 > 2.0 * 2.3, "{west:?}");
+        let south = p
+            .unreachable
+            .iter()
+            .find(|u| u.surface == SurfaceId::Wall(WallName::South))
+            .expect("below the radiator");
+        assert!(
+            south.bounds.v_m[0] < 0.2 && south.bounds.v_m[1] > 0.7,
+            "{south:?}"
+        );
+        assert!(
+            south.bounds.u_m[0] < 2.0 && south.bounds.u_m[1] > 3.0,
+            "{south:?}"
+        );
+        for (_, pass) in p
+            .passes()
+            .filter(|(_, p)| p.surface == SurfaceId::Wall(WallName::South))
+        {
+            for m in pass.moves.iter().filter(|m| m.spray) {
+                if m.from_m[0] > 2.0 && m.from_m[0] < 3.0 {
+                    assert!(m.from_m[1].min(m.to_m[1]) >= 0.72 - 1e-9, "{m:?}");
+                }
+            }
+        }
+        let s = predicted_score(&p);
+        assert!(
+            s.wall_coverage_pct >= 99.9 && s.ceiling_coverage_pct >= 99.9,
+            "{s:?}"
+        );
+        assert!(
+            (s.unreachable_m2 - p.unreachable.iter().map(|u| u.area_m2).sum::<f64>()).abs() < 0.05
+        );
+    }
+
+    #[test]
+    fn wall_above_the_lift_is_reported() {
+        // A 3.3 m room: the lift reaches 3.1 m, so each wall's top band
+        // (up to the edge margin under the ceiling) is out of reach.
+        let p = make(&room([4.0, 3.0], 3.3, Vec::new()));
+        check_moves(&p);
+        assert_eq!(p.unreachable.len(), 4, "{:?}", p.unreachable);
+        for u in &p.unreachable {
+            assert!(matches!(u.surface, SurfaceId::Wall(_)));
+            assert!((u.bounds.v_m[1] - (3.3 - 0.08)).abs() < 0.021, "{u:?}");
+            // Full coat only up to where the ramp above the last stroke
+            // allows.
+            assert!((u.bounds.v_m[0] - (3.1 - 0.07)).abs() < 0.021, "{u:?}");
+        }
+        let s = predicted_score(&p);
+        assert!(
+            s.wall_coverage_pct >= 99.9 && s.ceiling_coverage_pct >= 99.9,
+            "{s:?}"
+        );
+    }
+
+    #[test]
+    fn a_ceiling_out_of_the_lifts_reach_is_refused() {
+        let r = room([4.0, 3.0], 3.5, Vec::new());
+        let e = plan(
+            &r,
+            &tool(),
+            &VehicleSpec::default(),
+            &Pose2::new(2.0, 1.5, 0.0),
+        )
+        .expect_err("too high");
+        assert!(e.to_string().contains("lift"), "{e}");
+    }
+
+    fn opening() -> impl Strategy<Value = (usize, f64, f64, bool, f64, f64)> {
+        // Wall, position share, width, door?, sill, height.
+        (
+            0usize..4,
+            0.0..1.0f64,
+            0.5..1.4f64,
+            any::<bool>(),
+            0.6..1.2f64,
+            0.5..1.2f64,
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+        /// A coverage plan stays inside its surfaces and clear of their
+        /// openings, reaches every aim point, and its own prediction
+        /// coats ≥ 99.9% of the plasterable area within tolerance.
+        #[test]
+        fn plans_cover_their_rooms(
+            xs in 2.6..6.5f64,
+            ys in 2.4..5.0f64,
+            h in 2.3..3.1f64,
+            ops in proptest::collection::vec(opening(), 0..3),
+        ) {
+            let mut openings: Vec<WallOpening> = Vec::new();
+            for (w, at, width, door, sill, height) in ops {
+                let wall = WallName::ALL[w];
+                let len = WallLine::of(wall, [xs, ys]).length_m;
+                let width = width.min(len - 0.6);
+                let a = 0.3 + at * (len - 0.6 - width);
+                let sill_head = if door { [0.0, 2.0_f64.min(h - 0.3)] } else { [sill, (sill + height).min(h - 0.2)] };
+                let new = [a, a + width];
+                // One opening per stretch of wall, as buildings have.
+                if openings.iter().any(|o| o.wall == wall && o.along_m[0] < new[1] + 0.3 && o.along_m[1] > new[0] - 0.3) {
+                    continue;
+                }
+                openings.push(WallOpening {
+                    wall,
+                    kind: if door { OpeningKind::Door } else { OpeningKind::Window },
+                    along_m: new,
+                    sill_head_m: sill_head,
+                });
+            }
+            let p = make(&room([xs, ys], h, openings));
+            check_moves(&p);
+            prop_assert!(p.unreachable.is_empty(), "{:?}", p.unreachable);
+            let s = predicted_score(&p);
+            prop_assert!(s.wall_coverage_pct >= 99.9, "{:?}", s);
+            prop_assert!(s.ceiling_coverage_pct >= 99.9, "{:?}", s);
+            prop_assert!(s.overspray_pct <= 0.5, "{:?}", s);
+        }
+    }
+}
