@@ -8,6 +8,8 @@
 //! - [`Layout`]: its solids and its truth (walls, openings, rooms).
 //! - [`Simulator`]: implements [`stucco_core::Platform`]; [`Simulator::truth`]
 //!   is the truth about the robot.
+//! - [`Deposition`]: the sprayer's gantry and the plaster it lays on every
+//!   true wall and ceiling ([`Coat`]), when [`SimConfig::sprayer`] is set.
 //!
 //! ```
 //! use stucco_core::{DriveCommand, Platform};
@@ -24,6 +26,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod deposition;
 mod error;
 mod layout;
 mod plane;
@@ -35,6 +38,7 @@ mod trace;
 mod vehicle;
 mod world;
 
+pub use deposition::{Coat, Deposition, SprayerSpec, SurfaceKind, ToolState};
 pub use error::SimError;
 pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, TrueWall};
 pub use plane::{PlaneCaster, ray_circle};

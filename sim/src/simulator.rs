@@ -2,6 +2,7 @@
 //! physics steps of simulated time. It is a [`Platform`]; ground truth is
 //! kept apart, in [`Simulator::truth`] and [`Simulator::layout`].
 
+use crate::deposition::{Coat, Deposition, SprayerSpec, SurfaceKind, ToolState};
 use crate::layout::Layout;
 use crate::plane::PlaneCaster;
 use crate::scene::Scene;
@@ -13,7 +14,8 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use stucco_core::{
-    DriveCommand, EncoderSample, LaserSpec, Platform, Pose2, Readings, Scan, Stamp, VehicleSpec,
+    DriveCommand, EncoderSample, LaserSpec, Platform, Pose2, Readings, Scan, Stamp, ThicknessGrid,
+    ToolCommand, VehicleSpec,
 };
 
 /// How to simulate: the robot, its sensors, the floor and the faults.
@@ -32,6 +34,9 @@ pub struct SimConfig {
     pub faults: FaultConfig,
     /// Physics steps per second.
     pub physics_rate_hz: f64,
+    /// Its sprayer, if it carries one: then plaster is laid on the true
+    /// surfaces.
+    pub sprayer: Option<SprayerSpec>,
 }
 
 impl Default for SimConfig {
@@ -45,6 +50,7 @@ impl Default for SimConfig {
             dynamics: DynamicsConfig::default(),
             faults: FaultConfig::default(),
             physics_rate_hz: 100.0,
+            sprayer: None,
         }
     }
 }
@@ -81,6 +87,8 @@ pub struct Simulator {
     delayed: VecDeque<(i64, Scan)>,
     /// Encoder counts frozen by a stuck-encoder fault.
     frozen: Option<EncoderSample>,
+    /// The sprayer and the plaster laid.
+    deposition: Option<Deposition>,
 }
 
 impl Simulator {
@@ -104,7 +112,6 @@ impl Simulator {
             camera: config.camera.clone().map(CameraRig::new),
             drive: Drive::new(config.vehicle.clone(), config.dynamics.clone(), start),
             faults: config.faults,
-            layout,
             scene,
             rng,
             step_ns: (1e9 / config.physics_rate_hz.max(1.0)).round() as i64,
@@ -115,6 +122,8 @@ impl Simulator {
             bumper: false,
             delayed: VecDeque::new(),
             frozen: None,
+            deposition: config.sprayer.map(|s| Deposition::new(s, &layout)),
+            layout,
         }
     }
 
@@ -131,6 +140,34 @@ impl Simulator {
     /// The true walls, openings and rooms.
     pub fn layout(&self) -> &Layout {
         &self.layout
+    }
+
+    /// The plaster on every true surface, when the robot carries a
+    /// sprayer.
+    pub fn coats(&self) -> &[Coat] {
+        self.deposition.as_ref().map_or(&[], |d| d.coats())
+    }
+
+    /// The sprayer's true state, when the robot carries one.
+    pub fn tool_state(&self) -> Option<ToolState> {
+        self.deposition.as_ref().map(Deposition::state)
+    }
+
+    /// Plaster that has left the nozzle, m³.
+    pub fn sprayed_m3(&self) -> f64 {
+        self.deposition.as_ref().map_or(0.0, Deposition::sprayed_m3)
+    }
+
+    /// Puts back plaster laid by an earlier run (resuming from a
+    /// checkpoint): grids matched by room and surface.
+    pub fn restore_coats(
+        &mut self,
+        coats: &[(String, SurfaceKind, ThicknessGrid)],
+        sprayed_m3: f64,
+    ) {
+        if let Some(d) = &mut self.deposition {
+            d.restore(coats, sprayed_m3);
+        }
     }
 
     /// One physics step: the drive moves unless something is in the way,
@@ -156,6 +193,9 @@ impl Simulator {
         }
         let twist = self.drive.state().twist;
         let pose = self.drive.state().pose;
+        if let Some(d) = &mut self.deposition {
+            d.step(dt, &before, &pose);
+        }
         for scan in self.laser.sweep(
             &self.scene,
             t0,
@@ -210,6 +250,12 @@ impl Platform for Simulator {
 
     fn command(&mut self, drive: DriveCommand) {
         self.command = drive;
+    }
+
+    fn tool(&mut self, cmd: ToolCommand) {
+        if let Some(d) = &mut self.deposition {
+            d.command(cmd);
+        }
     }
 
     fn advance(&mut self, dt_s: f64) -> Readings {

@@ -2,7 +2,7 @@
 //! a real robot): actuator commands in, sensor readings out, time advanced
 //! by the caller.
 
-use crate::{Scan, Stamp};
+use crate::{Scan, Stamp, ToolCommand};
 use serde::{Deserialize, Serialize};
 
 /// What the drive is asked to do: the front wheel's speed and steering.
@@ -75,6 +75,11 @@ pub trait Platform {
 
     /// The drive command to hold from now on.
     fn command(&mut self, drive: DriveCommand);
+
+    /// The spray tool's command to hold from now on: where the nozzle
+    /// goes (its axes move there at their own speed), where it points,
+    /// whether plaster flows.
+    fn tool(&mut self, cmd: ToolCommand);
 
     /// Advances the platform by `dt_s` seconds and returns what its sensors
     /// delivered meanwhile.

@@ -782,13 +782,21 @@ fn order_lanes(mut lanes: Vec<(Lane, Vec<Station>)>, start: &Pose2) -> Vec<Stati
 }
 
 /// The band of a surface a spraying move coats: its path widened across
-/// by the width its speed lays the coat over (and half a cell, so bands of
-/// neighbouring strokes at uneven spacing leave no sliver between them).
+/// by the width its speed lays the coat over, and by half a cell all
+/// round, so neighbouring bands (strokes at uneven spacing, pieces of one
+/// stroke from two stations) leave no sliver between them.
 fn band(m: &Move, tool: &SprayTool) -> Rect {
     let half = tool.area_rate_m2ps() / m.speed_mps / 2.0 + PLAN_CELL_M / 2.0;
+    let e = PLAN_CELL_M / 2.0;
     let (u, v) = (
-        [m.from_m[0].min(m.to_m[0]), m.from_m[0].max(m.to_m[0])],
-        [m.from_m[1].min(m.to_m[1]), m.from_m[1].max(m.to_m[1])],
+        [
+            m.from_m[0].min(m.to_m[0]) - e,
+            m.from_m[0].max(m.to_m[0]) + e,
+        ],
+        [
+            m.from_m[1].min(m.to_m[1]) - e,
+            m.from_m[1].max(m.to_m[1]) + e,
+        ],
     );
     if u[1] - u[0] < v[1] - v[0] {
         Rect {
@@ -1118,7 +1126,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(32))]
+        #![proptest_config(ProptestConfig::with_cases(64))]
         /// A coverage plan stays inside its surfaces and clear of their
         /// openings, reaches every aim point, and its own prediction
         /// coats ≥ 99.9% of the plasterable area within tolerance.
