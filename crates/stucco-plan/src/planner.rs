@@ -383,7 +383,7 @@ impl Planner<'_> {
             let (a, b) = (a.min(b).max(gap), a.max(b).min(length - gap));
             (b > a).then_some([a, b])
         };
-        let x = tool.rail_m;
+        let x = tool.planned_rail_m();
         let reach_of = |t: f64| clip([t + x[0], t + x[1]]);
         let lift = [
             tool.lift_m[0].max(tool.skirting_m - tool.ramp_m()),
@@ -600,7 +600,7 @@ impl Planner<'_> {
     fn ceiling_reach(&self, base: &Pose2) -> Rect {
         let gap = self.tool.surface_gap_m;
         let [xs, ys] = self.room.size_m;
-        let [lo, hi] = room_box(base, self.tool.rail_m, self.tool.arm_m);
+        let [lo, hi] = room_box(base, self.tool.planned_rail_m(), self.tool.planned_arm_m());
         Rect {
             u_m: [lo[0].max(gap), hi[0].min(xs - gap)],
             v_m: [lo[1].max(gap), hi[1].min(ys - gap)],
@@ -648,7 +648,7 @@ impl Planner<'_> {
     /// the band of y, each with its stations (east end first).
     fn middle_lanes(&self, band: [f64; 2], next: &mut usize) -> Vec<(Lane, Vec<Station>)> {
         let tool = self.tool;
-        let [a0, a1] = tool.arm_m;
+        let [a0, a1] = tool.planned_arm_m();
         let reach = a1 - a0;
         let gap = tool.surface_gap_m;
         let xs = self.room.size_m[0];
@@ -663,7 +663,7 @@ impl Planner<'_> {
                 .map(|k| -1.0 + k as f64 * BASE_STEP_M)
                 .filter(|&x| self.free(&pose_at(x)))
                 .collect();
-            let x = tool.rail_m;
+            let x = tool.planned_rail_m();
             let mut stations = Vec::new();
             let mut tf = xs - gap;
             while tf > gap + 1e-6 {
@@ -930,9 +930,11 @@ mod tests {
 
     /// Every aim point lies on its surface, every spraying move stays
     /// `spray_off_m` clear of the openings, and the nozzle reaches every
-    /// aim point from its station with the gantry's travel.
+    /// aim point from its station with the gantry's travel less the
+    /// position tolerance.
     fn check_moves(p: &Plan) {
         let t = &p.tool;
+        let (rail, arm) = (t.planned_rail_m(), t.planned_arm_m());
         for station in &p.stations {
             for pass in &station.passes {
                 let s: &Surface = p.surface(pass.surface).expect("surface");
@@ -948,13 +950,10 @@ mod tests {
                             .transform_point(&nalgebra::Point2::new(n.x, n.y));
                         let e = 1e-6;
                         assert!(
-                            local.x >= t.rail_m[0] - e && local.x <= t.rail_m[1] + e,
+                            local.x >= rail[0] - e && local.x <= rail[1] + e,
                             "{local:?}"
                         );
-                        assert!(
-                            local.y >= t.arm_m[0] - e && local.y <= t.arm_m[1] + e,
-                            "{local:?}"
-                        );
+                        assert!(local.y >= arm[0] - e && local.y <= arm[1] + e, "{local:?}");
                         assert!(n.z >= t.lift_m[0] - e && n.z <= t.lift_m[1] + e, "{n:?}");
                     }
                     if m.spray {

@@ -51,6 +51,11 @@ pub struct SprayTool {
     pub surface_gap_m: f64,
     /// Clearance the body keeps from walls and obstacles, m.
     pub clearance_m: f64,
+    /// How far the robot may stand from a station's pose: plans keep this
+    /// much of the rail and arm spare at each end, m.
+    pub position_tolerance_m: f64,
+    /// Height of a door whose top the map does not know, m.
+    pub door_head_m: f64,
 }
 
 impl Default for SprayTool {
@@ -72,10 +77,12 @@ impl Default for SprayTool {
             tolerance: 0.1,
             spray_off_m: 0.03,
             opening_margin_m: 0.1,
-            edge_margin_m: 0.08,
+            edge_margin_m: 0.11,
             skirting_m: 0.1,
             surface_gap_m: 0.02,
             clearance_m: 0.12,
+            position_tolerance_m: 0.03,
+            door_head_m: 2.1,
         }
     }
 }
@@ -112,6 +119,23 @@ impl SprayTool {
     /// short of what the nozzle reaches, m.
     pub fn ramp_m(&self) -> f64 {
         self.opening_margin_m - self.spray_off_m
+    }
+
+    /// The rail's travel a plan may use: its ends kept spare for the
+    /// robot's position error, m.
+    pub fn planned_rail_m(&self) -> [f64; 2] {
+        [
+            self.rail_m[0] + self.position_tolerance_m,
+            self.rail_m[1] - self.position_tolerance_m,
+        ]
+    }
+
+    /// The arm's travel a plan may use, m.
+    pub fn planned_arm_m(&self) -> [f64; 2] {
+        [
+            self.arm_m[0] + self.position_tolerance_m,
+            self.arm_m[1] - self.position_tolerance_m,
+        ]
     }
 
     /// The nozzle's distance from the centre line at a wall, m.
@@ -184,16 +208,16 @@ impl SprayTool {
                 ),
             );
         }
-        if self.edge_margin_m < self.surface_gap_m + 1.5 * self.footprint_sigma_m {
+        let corner = self.surface_gap_m + self.position_tolerance_m;
+        if self.edge_margin_m < corner + 1.5 * self.footprint_sigma_m {
             return bad(
                 "edge_margin_m",
                 format!(
-                    "{:.3} m: the nozzle stops {:.3} m from a corner, so a {:.3} m \
+                    "{:.3} m: the nozzle may stop {corner:.3} m from a corner, so a {:.3} m \
                      footprint needs {:.3} m",
                     self.edge_margin_m,
-                    self.surface_gap_m,
                     self.footprint_sigma_m,
-                    self.surface_gap_m + 1.5 * self.footprint_sigma_m
+                    corner + 1.5 * self.footprint_sigma_m
                 ),
             );
         }
