@@ -20,6 +20,7 @@ mod experiments;
 mod mission;
 mod navigator;
 mod op;
+mod plastering;
 mod record;
 mod robot;
 mod simbench;
@@ -31,6 +32,7 @@ pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission}
 pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
 pub use op::{BenchReport, CommandResult, EventFeed, Operator};
+pub use plastering::{PlasterReport, PredictedScores, WorldState, sprayer_of, time_lower_bound};
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{RobotJob, RobotState, run_robot};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};

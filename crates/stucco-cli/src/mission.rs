@@ -49,6 +49,9 @@ pub struct Mission {
     /// The safety supervisor's settings.
     #[serde(default)]
     pub failsafe: SafetyConfig,
+    /// The spray tool and the coat (`plaster` tasks need it).
+    #[serde(default)]
+    pub spray: Option<stucco_plan::SprayTool>,
     /// The tasks, in order (`[[task]]`).
     #[serde(default, rename = "task")]
     pub tasks: Vec<TaskSpec>,
@@ -324,6 +327,7 @@ impl Mission {
                 gains: GainSchedule::default(),
                 safety: self.failsafe.clone(),
                 unattended,
+                spray: self.spray.clone(),
             },
             self.tasks.clone(),
         )

@@ -5,15 +5,16 @@
 
 use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_control::Limiter;
-use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp};
-use stucco_mission::{DoorEstimate, Estimate, WallGeometry, WallName};
+use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, ToolCommand};
+use stucco_mission::{DoorEstimate, Estimate, WallGeometry, WallName, WindowEstimate};
 use stucco_nav::{
     DoorConfig, DoorOpening, OdometryConfig, ProfilePose, RoomConfig, RoomCovariance, RoomEkf,
     RoomEkfConfig, RoomSearch, RoomState, ScanPoints, Wall, Window, WindowConfig, WindowFinder,
     find_doors_moving, sensor_twist, twist_at,
 };
+use stucco_plan::Obstacle;
 use stucco_sim::CameraSpec;
-use stucco_sim::{Layout, SimConfig, Simulator, WorldSpec};
+use stucco_sim::{Layout, SimConfig, Simulator, SprayerSpec, WorldSpec};
 
 /// Control period, s.
 pub const DT_S: f64 = 0.02;
@@ -46,7 +47,23 @@ pub struct Navigator {
     windows: [WindowFinder; 4],
     /// The wall the camera looked at last.
     camera_wall: Option<usize>,
+    /// Heights of the ceiling the camera measured, m (the latest).
+    ceiling_m: std::collections::VecDeque<f64>,
+    /// Scan echoes off the walls, counted in cells of the room frame.
+    floor: std::collections::BTreeMap<(i64, i64), u32>,
+    /// What stands on the floor, as of the last scan.
+    floor_boxes: Vec<Obstacle>,
 }
+
+/// Ceiling heights kept for the median.
+const CEILING_SAMPLES: usize = 400;
+/// Cells of the floor map, m.
+const FLOOR_CELL_M: f64 = 0.05;
+/// Echoes a cell needs to count as something standing there.
+const FLOOR_HITS: u32 = 20;
+/// Height assumed for what stands on the floor (the laser sees its
+/// footprint, not its top), m.
+pub const OBSTACLE_HEIGHT_M: f64 = 1.0;
 
 /// Smallest cosine between the camera's fan and a wall's normal for the
 /// profile to count for that wall.
@@ -75,7 +92,21 @@ impl Navigator {
         x0: RoomState,
         size_sigma_m: [f64; 2],
     ) -> anyhow::Result<Self> {
-        let cfg = SimConfig::default();
+        Self::with_sprayer(world, seed, x0, size_sigma_m, None)
+    }
+
+    /// As [`Navigator::new`], the robot carrying `sprayer`.
+    pub fn with_sprayer(
+        world: &WorldSpec,
+        seed: u64,
+        x0: RoomState,
+        size_sigma_m: [f64; 2],
+        sprayer: Option<SprayerSpec>,
+    ) -> anyhow::Result<Self> {
+        let cfg = SimConfig {
+            sprayer,
+            ..SimConfig::default()
+        };
         let vehicle = cfg.vehicle.clone();
         let cfg_laser = cfg.laser.clone();
         let camera = cfg.camera.clone();
@@ -110,7 +141,112 @@ impl Navigator {
             camera,
             windows: std::array::from_fn(|_| WindowFinder::new(WindowConfig::default())),
             camera_wall: None,
+            ceiling_m: std::collections::VecDeque::new(),
+            floor: std::collections::BTreeMap::new(),
+            floor_boxes: Vec::new(),
         })
+    }
+
+    /// The simulator (for its truth: the plaster laid, scoring only).
+    pub fn sim(&self) -> &Simulator {
+        &self.sim
+    }
+
+    /// The simulator, to put back the state of a resumed run.
+    pub fn sim_mut(&mut self) -> &mut Simulator {
+        &mut self.sim
+    }
+
+    /// The spray tool's command to hold.
+    pub fn tool(&mut self, cmd: ToolCommand) {
+        self.sim.tool(cmd);
+    }
+
+    /// The ceiling's height as the camera measured it (median), m.
+    pub fn ceiling_height(&self) -> Option<f64> {
+        if self.ceiling_m.len() < 20 {
+            return None;
+        }
+        let mut v: Vec<f64> = self.ceiling_m.iter().copied().collect();
+        v.sort_by(f64::total_cmp);
+        Some(v[v.len() / 2])
+    }
+
+    /// What stands on the floor: boxes around the cells where scans kept
+    /// finding echoes off the walls (connected cells, 8-neighbours).
+    pub fn floor_obstacles(&self) -> Vec<Obstacle> {
+        let cells: Vec<(i64, i64)> = self
+            .floor
+            .iter()
+            .filter(|(_, n)| **n >= FLOOR_HITS)
+            .map(|(c, _)| *c)
+            .collect();
+        let set: std::collections::BTreeSet<(i64, i64)> = cells.iter().copied().collect();
+        let mut seen = std::collections::BTreeSet::new();
+        let mut out = Vec::new();
+        for &c in &cells {
+            if !seen.insert(c) {
+                continue;
+            }
+            let (mut lo, mut hi) = (c, c);
+            let mut stack = vec![c];
+            while let Some((i, j)) = stack.pop() {
+                lo = (lo.0.min(i), lo.1.min(j));
+                hi = (hi.0.max(i), hi.1.max(j));
+                for di in -1..=1 {
+                    for dj in -1..=1 {
+                        let n = (i + di, j + dj);
+                        if set.contains(&n) && seen.insert(n) {
+                            stack.push(n);
+                        }
+                    }
+                }
+            }
+            let f = FLOOR_CELL_M;
+            let mut min = [lo.0 as f64 * f, lo.1 as f64 * f];
+            let mut max = [(hi.0 + 1) as f64 * f, (hi.1 + 1) as f64 * f];
+            // The laser sees a face: what lies between it and a wall less
+            // than a metre behind is taken as part of it.
+            let [xs, ys] = self.ekf.now().0.fixed_rows::<2>(3).into();
+            if min[0] < 1.0 {
+                min[0] = 0.0;
+            }
+            if min[1] < 1.0 {
+                min[1] = 0.0;
+            }
+            if max[0] > xs - 1.0 {
+                max[0] = xs;
+            }
+            if max[1] > ys - 1.0 {
+                max[1] = ys;
+            }
+            out.push(Obstacle {
+                min_m: min,
+                max_m: max,
+                height_m: OBSTACLE_HEIGHT_M,
+            });
+        }
+        out
+    }
+
+    /// Counts the scan's echoes that lie inside the room, off its walls,
+    /// in the floor map.
+    fn note_floor(&mut self, pts: &ScanPoints) {
+        let est = self.mission_estimate();
+        let laser = est.pose * self.mount;
+        let [xs, ys] = est.room_m;
+        for q in pts.points() {
+            let p = laser.transform_point(&q.p);
+            let off = 0.12;
+            if p.x < off || p.y < off || p.x > xs - off || p.y > ys - off {
+                continue;
+            }
+            let c = (
+                (p.x / FLOOR_CELL_M).floor() as i64,
+                (p.y / FLOOR_CELL_M).floor() as i64,
+            );
+            *self.floor.entry(c).or_insert(0) += 1;
+        }
     }
 
     /// Lets openings seen in the same place of a wall, scan after scan,
@@ -167,6 +303,17 @@ impl Navigator {
             room_sigma_m: [p[(3, 3)].max(0.0).sqrt(), p[(4, 4)].max(0.0).sqrt()],
             walls_seen: self.walls_seen,
             doors,
+            height_m: self.ceiling_height().unwrap_or(2.6),
+            windows: self
+                .windows()
+                .into_iter()
+                .map(|(wall, w)| WindowEstimate {
+                    wall,
+                    along_m: w.along_m,
+                    sill_head_m: w.sill_head_m,
+                })
+                .collect(),
+            obstacles: self.floor_boxes.clone(),
         }
     }
 
@@ -241,6 +388,8 @@ impl Navigator {
                     self.note_openings(&doors);
                 }
             }
+            self.note_floor(&pts);
+            self.floor_boxes = self.floor_obstacles();
             self.obstacles.clear();
             self.obstacles.extend(
                 pts.points()
@@ -308,6 +457,16 @@ impl Navigator {
         }
         self.camera_wall = now;
         if let Some((w, pose)) = target {
+            // Rays that end short of the wall, looking up, hit the ceiling.
+            for (el, r) in profile.elevations_rad.iter().zip(&profile.ranges_m) {
+                let across = r * el.cos() * pose.direction.x;
+                if *el > 0.3 && r.is_finite() && across < pose.distance_m - 0.1 {
+                    self.ceiling_m.push_back(cam.height_m + r * el.sin());
+                    if self.ceiling_m.len() > CEILING_SAMPLES {
+                        self.ceiling_m.pop_front();
+                    }
+                }
+            }
             self.windows[w].add(profile, &pose);
         }
     }

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
-use stucco_core::{DriveCommand, Pose2, Stamp, Telecommand};
+use stucco_core::{DriveCommand, Pose2, Stamp, Telecommand, ToolCommand};
 use stucco_mission::{Estimate, Event, Executive, Inputs, OperatorCommand, Progress};
 
 /// The `/mission` message.
@@ -68,7 +68,7 @@ struct RecordedPoints {
 struct RecordedOutputs {
     stamp: Stamp,
     drive: DriveCommand,
-    spray: bool,
+    tool: ToolCommand,
 }
 
 /// Writes a run's recording.
@@ -144,7 +144,7 @@ impl<W: Write + Seek> Recorder<W> {
         inputs: &Inputs,
         new_scan: bool,
         drive: DriveCommand,
-        spray: bool,
+        tool: ToolCommand,
         events: &[Event],
         truth: &Pose2,
     ) -> Result<()> {
@@ -180,11 +180,7 @@ impl<W: Write + Seek> Recorder<W> {
         self.put(
             "/executive/outputs",
             stamp,
-            &RecordedOutputs {
-                stamp,
-                drive,
-                spray,
-            },
+            &RecordedOutputs { stamp, drive, tool },
         )?;
         for e in events {
             self.put("/events", e.stamp, e)?;
@@ -230,7 +226,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
         identical: 0,
         first_difference: None,
     };
-    let mut replayed = DriveCommand::STOP;
+    let mut replayed = (DriveCommand::STOP, ToolCommand::default());
     for message in stream {
         let m = message.map_err(|e| bad(format!("unreadable: {e}")))?;
         let json = |what: &str| bad(format!("a {what} message is not what stucco wrote"));
@@ -268,7 +264,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                         telecommands: &i.telecommands,
                     },
                 );
-                replayed = out.drive;
+                replayed = (out.drive, out.tool);
                 pending = Some(i);
             }
             "/executive/outputs" => {
@@ -278,10 +274,10 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                     return Err(bad("an output without its inputs".into()));
                 };
                 report.ticks += 1;
-                if o.drive == replayed {
+                if (o.drive, o.tool) == replayed {
                     report.identical += 1;
                 } else if report.first_difference.is_none() {
-                    report.first_difference = Some((i.stamp, o.drive, replayed));
+                    report.first_difference = Some((i.stamp, o.drive, replayed.0));
                 }
             }
             _ => {}

@@ -102,6 +102,11 @@ pub struct PassReport {
     pub samples: usize,
 }
 
+/// The plan a plastering run carries out, beside its checkpoint.
+const PLAN_FILE: &str = "plan.json";
+/// The world's plaster when the run stopped (kept for a resumed run).
+const WORLD_FILE: &str = "world.json";
+
 /// The report of one run (`DIR/report.json`).
 #[derive(Clone, Debug, Serialize)]
 pub struct MissionReport {
@@ -158,6 +163,26 @@ pub struct MissionReport {
     pub safety_stops: usize,
     /// Events written.
     pub events: usize,
+    /// Plasterable wall area the plan reaches within the coat's tolerance,
+    /// on the true walls, % (plastering missions).
+    pub wall_coverage_pct: Option<f64>,
+    /// The same for the ceiling, %.
+    pub ceiling_coverage_pct: Option<f64>,
+    /// Plaster sprayed that landed in doors and windows, %.
+    pub overspray_pct: Option<f64>,
+    /// Coefficient of variation of the thickness over the plasterable
+    /// area.
+    pub thickness_cv: Option<f64>,
+    /// Plasterable area thicker than the tolerance allows (sprayed twice),
+    /// %.
+    pub double_sprayed_pct: Option<f64>,
+    /// Time the `plaster` task took (this run), s.
+    pub mission_time_s: Option<f64>,
+    /// The least it could take: area at the tool's rate plus straight
+    /// travel between stations at top speed, s.
+    pub mission_time_lower_bound_s: Option<f64>,
+    /// The plastering's details.
+    pub plaster: Option<crate::plastering::PlasterReport>,
 }
 
 /// The report of `--runs N` (`DIR/report.json`): the runs and their sum.
@@ -473,15 +498,36 @@ fn run_once(
             [known.room_sigma_m; 2],
         ),
     };
-    let mut nav = Navigator::new(&world, seed, x0, size_sigma)?;
+    let sprayer = mission.spray.as_ref().map(crate::plastering::sprayer_of);
+    let mut nav = Navigator::with_sprayer(&world, seed, x0, size_sigma, sprayer)?;
     if let Some(cp) = resume {
         for d in &cp.map.doors {
             nav.add_known_door(d.wall.index(), d.position_m, d.width_m, d.sigma_m);
+        }
+        // The plaster stays on the walls when the robot stops.
+        if let Some(dir) = out
+            && dir.join(WORLD_FILE).exists()
+        {
+            crate::plastering::WorldState::load(&dir.join(WORLD_FILE))?.restore(nav.sim_mut());
         }
     }
     nav.discover_doors(true);
     let mut exec = mission.executive(true);
     if let Some(cp) = resume {
+        if cp.progress.plaster.is_some()
+            && let Some(dir) = out
+        {
+            let path = dir.join(PLAN_FILE);
+            let text = std::fs::read_to_string(&path).map_err(|e| {
+                BadInput(format!(
+                    "{}: the plan the checkpoint was carrying out: {e}",
+                    path.display()
+                ))
+            })?;
+            let plan: stucco_plan::Plan = serde_json::from_str(&text)
+                .map_err(|e| BadInput(format!("{}: not a plan: {e}", path.display())))?;
+            exec.resume_plan(plan);
+        }
         exec.resume_from(&cp.progress)
             .map_err(|e| BadInput(format!("the checkpoint does not fit the mission: {e}")))?;
     }
@@ -506,8 +552,20 @@ fn run_once(
         }
         None => None,
     };
+    let plan_written = std::cell::RefCell::new(String::new());
     let save = |exec: &Executive, nav: &Navigator| -> Result<()> {
         if let Some(dir) = out {
+            // The plan first, once: the checkpoint names it by digest.
+            if let Some(plan) = exec.plaster_plan() {
+                let digest = stucco_mission::plan_digest(plan);
+                if *plan_written.borrow() != digest {
+                    write_atomic(
+                        &dir.join(PLAN_FILE),
+                        serde_json::to_string(plan)?.as_bytes(),
+                    )?;
+                    *plan_written.borrow_mut() = digest;
+                }
+            }
             let est = nav.mission_estimate();
             let cp = Checkpoint {
                 mission: mission.name.clone(),
@@ -554,6 +612,8 @@ fn run_once(
         std::collections::BTreeMap::new();
     let limit = mission.time_limit_s;
     let mut step = 0usize;
+    let mut plan_seen: Option<stucco_plan::Plan> = None;
+    let mut plaster_start: Option<Pose2> = None;
     loop {
         let now = nav.now();
         let est = nav.mission_estimate();
@@ -573,7 +633,7 @@ fn run_once(
                 &inputs,
                 new_scan,
                 out_.drive,
-                out_.spray,
+                out_.tool,
                 &out_.events,
                 &to_room(&nav.truth()),
             )?;
@@ -595,6 +655,13 @@ fn run_once(
         if out_.checkpoint_due {
             save(&exec, &nav)?;
         }
+        if plan_seen.is_none() {
+            plan_seen = exec.plaster_plan().cloned();
+            if plan_seen.is_some() {
+                plaster_start = Some(nav.mission_estimate().pose);
+            }
+        }
+        nav.tool(out_.tool);
         if exec.mode().is_final() {
             break;
         }
@@ -645,6 +712,11 @@ fn run_once(
         r.finish()?;
     }
     save(&exec, &nav)?;
+    if let Some(dir) = out
+        && mission.spray.is_some()
+    {
+        crate::plastering::WorldState::of(nav.sim()).save(&dir.join(WORLD_FILE))?;
+    }
     let est = nav.mission_estimate();
     let (outcome, reason) = match (exec.mode(), time_out) {
         _ if stopped => (
@@ -753,6 +825,25 @@ fn run_once(
         .iter()
         .filter_map(|w| w.edge_error_m)
         .reduce(f64::max);
+    let plastered = plan_seen.as_ref().map(|plan| {
+        let score = crate::plastering::score_run(nav.sim(), &layout, &frame, plan);
+        let predicted = stucco_plan::predicted_score(plan);
+        let index = exec
+            .tasks()
+            .iter()
+            .position(|t| matches!(t, TaskSpec::Plaster { .. }));
+        let seconds = index.and_then(|i| task_seconds[i]);
+        let start = plaster_start.unwrap_or(est.pose);
+        let bound = crate::plastering::time_lower_bound(
+            plan,
+            &start,
+            stucco_sim::SimConfig::default().vehicle.max_speed_mps,
+        );
+        (score, predicted, seconds, bound, plan.stations.len())
+    });
+    if let (Some(dir), Some(plan)) = (out, plan_seen.as_ref()) {
+        crate::plastering::draw_coats(dir, &layout, &frame, nav.sim(), &plan.tool)?;
+    }
     let wall = t0.elapsed().as_secs_f64();
     let sim = nav.now().as_secs_f64();
     let n = trace.n.max(1) as f64;
@@ -811,6 +902,28 @@ fn run_once(
         path_length_m: trace.length,
         safety_stops,
         events,
+        wall_coverage_pct: plastered.as_ref().map(|p| p.0.wall_coverage_pct),
+        ceiling_coverage_pct: plastered.as_ref().map(|p| p.0.ceiling_coverage_pct),
+        overspray_pct: plastered.as_ref().map(|p| p.0.overspray_pct),
+        thickness_cv: plastered.as_ref().map(|p| p.0.thickness_cv),
+        double_sprayed_pct: plastered.as_ref().map(|p| p.0.over_pct),
+        mission_time_s: plastered.as_ref().and_then(|p| p.2),
+        mission_time_lower_bound_s: plastered.as_ref().map(|p| p.3),
+        plaster: plastered.map(|(score, predicted, _, _, stations)| {
+            crate::plastering::PlasterReport {
+                stations,
+                unreachable_m2: plan_seen
+                    .as_ref()
+                    .map_or(0.0, |p| p.unreachable.iter().map(|u| u.area_m2).sum()),
+                sprayed_l: score.sprayed_l,
+                surfaces: score.surfaces,
+                predicted: crate::plastering::PredictedScores {
+                    wall_coverage_pct: predicted.wall_coverage_pct,
+                    ceiling_coverage_pct: predicted.ceiling_coverage_pct,
+                    thickness_cv: predicted.thickness_cv,
+                },
+            }
+        }),
     };
     if let Some(dir) = out {
         write_atomic(

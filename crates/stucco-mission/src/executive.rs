@@ -4,13 +4,28 @@
 
 use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
 use crate::model::{Estimate, WallGeometry, pose_at_wall};
+use crate::plaster::{Cursor, Phase, PlasterProgress, PlasterRun, plan_digest};
 use crate::supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor};
 use crate::task::{OnTimeout, TaskSpec, WallName};
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, VecDeque};
 use stucco_control::GainSchedule;
-use stucco_core::{Ack, Command, DriveCommand, Pose2, Reply, Stamp, Telecommand, VehicleSpec};
+use stucco_core::{
+    Ack, Command, DriveCommand, Pose2, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec,
+    wrap_angle,
+};
+use stucco_plan::{OpeningKind, Plan, RoomModel, SprayTool, SurfaceId, WallOpening};
+
+/// Heading off a station the gantry's geometry takes without a second
+/// approach, rad (2°).
+const HEADING_SPARE_RAD: f64 = 0.035;
+/// How far a robot turned on its station backs off to come on again, m.
+const REALIGN_M: f64 = 1.0;
+
+/// Where the nozzle waits while the robot drives, robot frame, m: over
+/// the body.
+pub const PARK_NOZZLE_M: [f64; 3] = [0.3, 0.0, 1.2];
 
 /// Run-in along the wall before a pass starts, m: the line law's distance
 /// to settle on the standoff from where the robot could turn (the offset
@@ -178,6 +193,29 @@ pub enum EventKind {
     LinkLost,
     /// It came back.
     LinkRestored,
+    /// The robot stands at a plastering station and starts spraying.
+    StationStarted {
+        /// The task.
+        task: usize,
+        /// The station's index in the plan.
+        station: usize,
+        /// Stations in the plan.
+        stations: usize,
+        /// Where the robot stands from the station's pose (forward, left),
+        /// m.
+        offset_m: [f64; 2],
+        /// Its heading from the station's, rad.
+        heading_off_rad: f64,
+    },
+    /// A surface's pass at a station is sprayed.
+    PassDone {
+        /// The task.
+        task: usize,
+        /// The station.
+        station: usize,
+        /// The surface.
+        surface: String,
+    },
     /// An operator command could not be followed.
     CommandRefused {
         /// The command.
@@ -210,8 +248,9 @@ pub struct Inputs<'a> {
 pub struct Outputs {
     /// The drive command (after the supervisor).
     pub drive: DriveCommand,
-    /// Spray on (only ever with the supervisor's leave).
-    pub spray: bool,
+    /// The spray tool's command (plaster flows only with the
+    /// supervisor's leave).
+    pub tool: ToolCommand,
     /// Events since the last tick.
     pub events: Vec<Event>,
     /// A unit of work completed: the progress should be written now.
@@ -232,6 +271,8 @@ pub struct ExecutiveConfig {
     /// No operator is there to answer: what would wait for one fails
     /// the mission instead (a bumper, an e-stop).
     pub unattended: bool,
+    /// The spray tool and the coat, for `plaster` tasks.
+    pub spray: Option<SprayTool>,
 }
 
 /// The mission's progress as a checkpoint keeps it.
@@ -243,6 +284,9 @@ pub struct Progress {
     pub tasks: Vec<String>,
     /// Each task's state.
     pub status: Vec<TaskStatus>,
+    /// The `plaster` task under way: how far it got.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plaster: Option<PlasterProgress>,
 }
 
 /// Why a checkpoint cannot be resumed from.
@@ -268,6 +312,8 @@ struct ActiveTask {
     loops: usize,
     /// Seconds the way has been blocked.
     blocked_s: f64,
+    /// A `plaster` task's plan and where it is in it.
+    plaster: Option<PlasterRun>,
 }
 
 /// The executive.
@@ -297,6 +343,15 @@ pub struct Executive {
     /// Whether the operator's link is up (none: no operator yet).
     link_up: Option<bool>,
     acks: Vec<Ack>,
+    /// The spray tool's command.
+    tool: ToolCommand,
+    /// Seconds since the last tick.
+    dt: f64,
+    /// A stroke was finished this tick: the progress should be written.
+    stroke_done: bool,
+    /// A checkpoint's plastering progress and the plan beside it, for the
+    /// `plaster` task to take up.
+    resume_plaster: Option<(PlasterProgress, Option<Plan>)>,
 }
 
 impl Executive {
@@ -322,6 +377,13 @@ impl Executive {
             jog: None,
             link_up: None,
             acks: Vec::new(),
+            tool: ToolCommand {
+                nozzle_m: PARK_NOZZLE_M,
+                ..ToolCommand::default()
+            },
+            dt: 0.0,
+            stroke_done: false,
+            resume_plaster: None,
         }
     }
 
@@ -373,7 +435,44 @@ impl Executive {
                 other => other.clone(),
             };
         }
+        if let Some(p) = &progress.plaster {
+            if !matches!(self.tasks.get(p.task), Some(TaskSpec::Plaster { .. })) {
+                return Err(ProgressMismatch(format!(
+                    "the checkpoint's plastering progress is for task {}, which is not a \
+                     plaster task",
+                    p.task
+                )));
+            }
+            let plan = self.resume_plaster.take().and_then(|(_, plan)| plan);
+            self.resume_plaster = Some((p.clone(), plan));
+        }
         Ok(())
+    }
+
+    /// Hands over the plan a checkpoint's `plaster` task was carrying out
+    /// (kept beside the checkpoint): the task takes it up from its cursor.
+    pub fn resume_plan(&mut self, plan: Plan) {
+        match &mut self.resume_plaster {
+            Some((_, p)) => *p = Some(plan),
+            None => {
+                self.resume_plaster = Some((
+                    PlasterProgress {
+                        task: usize::MAX,
+                        cursor: Cursor::default(),
+                        plan_digest: String::new(),
+                    },
+                    Some(plan),
+                ))
+            }
+        }
+    }
+
+    /// The plan of the `plaster` task under way.
+    pub fn plaster_plan(&self) -> Option<&Plan> {
+        self.active
+            .as_ref()
+            .and_then(|a| a.plaster.as_ref())
+            .map(|r| &r.plan)
     }
 
     /// The progress to keep in a checkpoint: the mission file's tasks (the
@@ -386,6 +485,13 @@ impl Executive {
                 .map(|i| self.tasks[i].name().to_owned())
                 .collect(),
             status: mine.map(|i| self.status[i].clone()).collect(),
+            plaster: self.active.as_ref().and_then(|a| {
+                a.plaster.as_ref().map(|r| PlasterProgress {
+                    task: a.index,
+                    cursor: r.cursor,
+                    plan_digest: plan_digest(&r.plan),
+                })
+            }),
         }
     }
 
@@ -434,6 +540,7 @@ impl Executive {
             .last_tick
             .map_or(0.0, |t| now.seconds_since(t).max(0.0));
         self.last_tick = Some(now);
+        self.dt = dt;
         let mut checkpoint_due = false;
         if !self.started {
             self.started = true;
@@ -488,12 +595,19 @@ impl Executive {
                 Some((cmd, _, _)) => (*cmd, false),
                 None => self.run(now, inputs.estimate),
             };
-            checkpoint_due |= unit_done;
+            checkpoint_due |= unit_done | std::mem::take(&mut self.stroke_done);
             drive = self.supervise(now, cmd, inputs, dt, &mut checkpoint_due);
         }
+        // Plaster flows only while the mission runs and the supervisor
+        // lets the robot be.
+        let spraying = self.mode == MissionMode::Running
+            && self.jog.is_none()
+            && self.hazard.is_none()
+            && !inputs.estop;
+        let tool = if spraying { self.tool } else { self.tool.off() };
         Outputs {
             drive,
-            spray: false,
+            tool,
             events: std::mem::take(&mut self.events),
             checkpoint_due,
             acks: std::mem::take(&mut self.acks),
@@ -861,6 +975,7 @@ impl Executive {
                             current: None,
                             loops: 0,
                             blocked_s: 0.0,
+                            plaster: None,
                         });
                         self.fail(now, reason);
                         return (DriveCommand::STOP, true);
@@ -888,11 +1003,31 @@ impl Executive {
 
     /// Plans task `index` from the estimate.
     fn start(&mut self, now: Stamp, index: usize, est: &Estimate) -> Result<ActiveTask, String> {
-        let gains = &self.config.gains;
-        let pose = est.pose;
         let clearance = self.pivot_clearance();
+        let pose = est.pose;
         let mut queue = VecDeque::new();
+        let mut plaster = None;
+        if let TaskSpec::Plaster {
+            walls,
+            ceiling,
+            speed_mps,
+            ..
+        } = self.tasks[index].clone()
+        {
+            let run = self.plaster_run(index, &walls, ceiling, est)?;
+            queue.extend(station_way(
+                &self.config.gains,
+                clearance,
+                &run,
+                run.cursor.station,
+                &pose,
+                speed_mps,
+            ));
+            plaster = Some(run);
+        }
+        let gains = &self.config.gains;
         match &self.tasks[index] {
+            TaskSpec::Plaster { .. } => {}
             TaskSpec::MapRoom {
                 path,
                 inset_m,
@@ -1048,6 +1183,7 @@ impl Executive {
             current: None,
             loops: 0,
             blocked_s: 0.0,
+            plaster,
         })
     }
 
@@ -1102,6 +1238,271 @@ impl Executive {
         ))
     }
 
+    /// The plan a `plaster` task carries out: the one a checkpoint left
+    /// (from its cursor), or a new one on the room as the robot knows it.
+    fn plaster_run(
+        &mut self,
+        index: usize,
+        walls: &[WallName],
+        ceiling: bool,
+        est: &Estimate,
+    ) -> Result<PlasterRun, String> {
+        if let Some((p, plan)) = self.resume_plaster.take()
+            && p.task == index
+        {
+            let Some(plan) = plan else {
+                return Err(format!(
+                    "plaster: the checkpoint stopped at station {} but the plan it was \
+                     carrying out is missing",
+                    p.cursor.station
+                ));
+            };
+            let digest = plan_digest(&plan);
+            if digest != p.plan_digest {
+                return Err(format!(
+                    "plaster: the plan beside the checkpoint ({digest}) is not the one it was \
+                     carrying out ({})",
+                    p.plan_digest
+                ));
+            }
+            return Ok(PlasterRun {
+                plan,
+                cursor: p.cursor,
+                phase: Phase::Moving,
+                retries: 0,
+            });
+        }
+        let Some(tool) = self.config.spray.clone() else {
+            return Err("plaster: the mission has no [spray] tool".to_owned());
+        };
+        let door_width = |w: Option<f64>| w.unwrap_or(0.9);
+        let mut openings: Vec<WallOpening> = est
+            .doors
+            .iter()
+            .map(|d| {
+                let half = door_width(d.width_m) / 2.0;
+                WallOpening {
+                    wall: d.wall,
+                    kind: OpeningKind::Door,
+                    along_m: [d.position_m - half, d.position_m + half],
+                    sill_head_m: [0.0, tool.door_head_m],
+                }
+            })
+            .collect();
+        openings.extend(est.windows.iter().map(|w| WallOpening {
+            wall: w.wall,
+            kind: OpeningKind::Window,
+            along_m: w.along_m,
+            sill_head_m: w.sill_head_m,
+        }));
+        let room = RoomModel {
+            size_m: est.room_m,
+            height_m: est.height_m,
+            openings,
+            obstacles: est.obstacles.clone(),
+        };
+        let mut plan = stucco_plan::plan(&room, &tool, &self.config.vehicle, &est.pose)
+            .map_err(|e| format!("plaster: {e}"))?;
+        let wanted = |s: SurfaceId| match s {
+            SurfaceId::Wall(w) => walls.contains(&w),
+            SurfaceId::Ceiling => ceiling,
+        };
+        for station in &mut plan.stations {
+            station.passes.retain(|p| wanted(p.surface));
+        }
+        plan.stations.retain(|s| !s.passes.is_empty());
+        Ok(PlasterRun {
+            plan,
+            cursor: Cursor::default(),
+            phase: Phase::Moving,
+            retries: 0,
+        })
+    }
+
+    /// Steps a `plaster` task: the way to a station, settling there, the
+    /// nozzle to its first point, then the pass's moves in time.
+    fn step_plaster(&mut self, now: Stamp, est: &Estimate, speed: f64, settle: f64) -> TaskStep {
+        let vehicle = self.config.vehicle.clone();
+        let gains = self.config.gains.clone();
+        let clearance = self.pivot_clearance();
+        let dt = self.dt;
+        let spray_ok =
+            est.position_sigma_m <= self.config.safety.spray_max_sigma_m && self.hazard.is_none();
+        let Some(a) = self.active.as_mut() else {
+            return TaskStep::Done;
+        };
+        let index = a.index;
+        let Some(run) = a.plaster.as_mut() else {
+            return TaskStep::Failed("plaster: no plan".to_owned());
+        };
+        if run.finished() {
+            return TaskStep::Done;
+        }
+        let park = ToolCommand {
+            nozzle_m: PARK_NOZZLE_M,
+            ..ToolCommand::default()
+        };
+        match run.phase {
+            Phase::Moving => {
+                if let Some(cmd) = step_behaviours(a, now, est, &vehicle, &mut self.events) {
+                    self.tool = park;
+                    return TaskStep::Drive(cmd);
+                }
+                if let Some(r) = a.plaster.as_mut() {
+                    r.phase = Phase::Settling { left_s: settle };
+                }
+                self.tool = park;
+                TaskStep::Drive(DriveCommand::STOP)
+            }
+            Phase::Settling { left_s } => {
+                let left_s = left_s - dt;
+                if left_s > 0.0 {
+                    run.phase = Phase::Settling { left_s };
+                    return TaskStep::Drive(DriveCommand::STOP);
+                }
+                let station = run.cursor.station;
+                let base = run.plan.stations[station].base;
+                let off = base.inverse() * est.pose;
+                // Off the station by more than the gantry has spare: once
+                // or twice more onto it, along the lane.
+                let spare = run.plan.tool.position_tolerance_m;
+                if run.retries < 2 {
+                    if off.theta.abs() > HEADING_SPARE_RAD {
+                        // Turned: back off along the lane and come on
+                        // again, the line law taking out the heading.
+                        run.retries += 1;
+                        let back = base * Pose2::new(-REALIGN_M, 0.0, 0.0);
+                        a.queue
+                            .push_back(Behaviour::reverse_to(&gains, back, speed));
+                        a.queue.push_back(Behaviour::regulate(&gains, base, 0.1));
+                        run.phase = Phase::Moving;
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
+                    if off.x.abs() > spare || off.y.abs() > 2.0 * spare {
+                        run.retries += 1;
+                        a.queue.push_back(if off.x > 0.0 {
+                            Behaviour::reverse_to(&gains, base, 0.1)
+                        } else {
+                            Behaviour::regulate(&gains, base, 0.1)
+                        });
+                        run.phase = Phase::Moving;
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
+                }
+                run.retries = 0;
+                let stations = run.plan.stations.len();
+                self.events.push(Event {
+                    stamp: now,
+                    kind: EventKind::StationStarted {
+                        task: index,
+                        station,
+                        stations,
+                        offset_m: [off.x, off.y],
+                        heading_off_rad: off.theta,
+                    },
+                });
+                run.phase = Phase::Positioning { left_s: -1.0 };
+                TaskStep::Drive(DriveCommand::STOP)
+            }
+            Phase::Positioning { left_s } => {
+                let Some(first) = run.first_point(est) else {
+                    return TaskStep::Failed(format!(
+                        "plaster: the robot does not face the surface of station {}",
+                        run.cursor.station
+                    ));
+                };
+                let left_s = if left_s < 0.0 {
+                    // Newly here: the axes travel at their speed.
+                    let far = (0..3)
+                        .map(|k| (first.nozzle_m[k] - self.tool.nozzle_m[k]).abs())
+                        .fold(0.0, f64::max);
+                    far / run.plan.tool.axis_speed_mps + 0.2
+                } else {
+                    left_s - dt
+                };
+                self.tool = first;
+                run.phase = if left_s > 0.0 {
+                    Phase::Positioning { left_s }
+                } else {
+                    Phase::Spraying { in_move_s: 0.0 }
+                };
+                TaskStep::Drive(DriveCommand::STOP)
+            }
+            Phase::Spraying { in_move_s } => {
+                let mut t = in_move_s + if spray_ok { dt } else { 0.0 };
+                loop {
+                    let c = run.cursor;
+                    let Some(pass) = run
+                        .plan
+                        .stations
+                        .get(c.station)
+                        .and_then(|s| s.passes.get(c.pass))
+                    else {
+                        return TaskStep::Done;
+                    };
+                    let surface = pass.surface;
+                    let Some(duration) = pass.moves.get(c.step).map(|m| m.duration_s()) else {
+                        return TaskStep::Done;
+                    };
+                    if t < duration {
+                        break;
+                    }
+                    t -= duration;
+                    if pass.moves[c.step].spray {
+                        self.stroke_done = true;
+                    }
+                    let station_done = run.advance();
+                    if run.cursor.pass != c.pass || station_done {
+                        self.events.push(Event {
+                            stamp: now,
+                            kind: EventKind::PassDone {
+                                task: index,
+                                station: c.station,
+                                surface: surface_name(surface),
+                            },
+                        });
+                        self.stroke_done = true;
+                    }
+                    if run.finished() {
+                        self.tool = park;
+                        return TaskStep::Done;
+                    }
+                    if station_done {
+                        let k = run.cursor.station;
+                        let mut way = Vec::new();
+                        if run.lane(k) != run.lane(k - 1) {
+                            way.extend(lane_exit(&gains, clearance, run, k - 1, &est.pose, speed));
+                        }
+                        let from = way
+                            .last()
+                            .and_then(|b| match b.kind() {
+                                BehaviourKind::Regulate { goal } => Some(*goal),
+                                _ => None,
+                            })
+                            .unwrap_or(est.pose);
+                        way.extend(station_way(&gains, clearance, run, k, &from, speed));
+                        run.phase = Phase::Moving;
+                        a.queue.extend(way);
+                        self.tool = park;
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
+                    if run.cursor.pass != c.pass {
+                        run.phase = Phase::Positioning { left_s: -1.0 };
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
+                }
+                run.phase = Phase::Spraying { in_move_s: t };
+                if let Some(cmd) = run.command(t, est) {
+                    self.tool = ToolCommand {
+                        spray: cmd.spray && spray_ok,
+                        ..cmd
+                    };
+                }
+                TaskStep::Drive(DriveCommand::STOP)
+            }
+        }
+    }
+
     /// Steps the active task.
     fn step_task(&mut self, now: Stamp, est: &Estimate) -> TaskStep {
         let vehicle = self.config.vehicle.clone();
@@ -1111,6 +1512,15 @@ impl Executive {
             return TaskStep::Done;
         };
         let spec = &self.tasks[a.index];
+        if let TaskSpec::Plaster {
+            speed_mps,
+            settle_s,
+            ..
+        } = spec
+        {
+            let (speed, settle) = (*speed_mps, *settle_s);
+            return self.step_plaster(now, est, speed, settle);
+        }
         let elapsed = now.seconds_since(a.started);
         // Task-level ends: timeouts and the conditions behaviours do not see.
         match spec {
@@ -1234,6 +1644,102 @@ impl Executive {
             }
         }
     }
+}
+
+/// The way from `from` to station `k`: along its lane when the robot is
+/// on it already (forward or backing), else onto the lane where the robot
+/// can turn (`clearance` from every wall), and along it to the station.
+fn station_way(
+    gains: &GainSchedule,
+    clearance: f64,
+    run: &PlasterRun,
+    k: usize,
+    from: &Pose2,
+    speed: f64,
+) -> Vec<Behaviour> {
+    let (Some(station), Some((line, dist))) = (run.plan.stations.get(k), run.lane_line(k)) else {
+        return Vec::new();
+    };
+    let goal = station.base;
+    let heading = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
+    let p = from.position().coords;
+    let off = line.inward.dot(&(p - line.origin)) - dist;
+    if off.abs() < 0.15 && wrap_angle(from.theta - goal.theta).abs() < 0.2 {
+        let ahead = heading.dot(&(goal.position().coords - p));
+        return vec![if ahead >= 0.0 {
+            Behaviour::regulate(gains, goal, speed)
+        } else {
+            Behaviour::reverse_to(gains, goal, speed)
+        }];
+    }
+    let dir = line.along.dot(&heading).signum();
+    let at = line.along.dot(&(goal.position().coords - line.origin));
+    let (lo, hi) = (clearance, line.length_m - clearance);
+    let entry_at = (at - dir * RUN_IN_M).clamp(lo.min(hi), hi.max(lo));
+    let e = line.point(entry_at, dist.max(clearance));
+    let mut way = go_to(gains, from, &Pose2::new(e.x, e.y, goal.theta), speed);
+    way.push(Behaviour::regulate(gains, goal, speed));
+    way
+}
+
+/// Out of the lane of station `k` (the robot at `from` on it) to where it
+/// can turn: forward along the lane and away from its wall, the front
+/// leading, as a pass along a wall ends.
+fn lane_exit(
+    gains: &GainSchedule,
+    clearance: f64,
+    run: &PlasterRun,
+    k: usize,
+    from: &Pose2,
+    speed: f64,
+) -> Vec<Behaviour> {
+    let Some((line, dist)) = run.lane_line(k) else {
+        return Vec::new();
+    };
+    let heading = nalgebra::Vector2::new(from.theta.cos(), from.theta.sin());
+    let dir = line.along.dot(&heading).signum();
+    let at = line.along.dot(&(from.position().coords - line.origin));
+    let (lo, hi) = (clearance, line.length_m - clearance);
+    let out_at = (at + dir * RUN_IN_M).clamp(lo.min(hi), hi.max(lo));
+    let o = line.point(out_at, dist.max(clearance));
+    vec![Behaviour::regulate(
+        gains,
+        Pose2::new(o.x, o.y, from.theta),
+        speed,
+    )]
+}
+
+/// Runs the behaviours of `a`'s queue: the command of the one under way,
+/// or `None` when the queue is done.
+fn step_behaviours(
+    a: &mut ActiveTask,
+    now: Stamp,
+    est: &Estimate,
+    vehicle: &VehicleSpec,
+    events: &mut Vec<Event>,
+) -> Option<DriveCommand> {
+    loop {
+        if a.current.is_none() {
+            let next = a.queue.pop_front()?;
+            events.push(Event {
+                stamp: now,
+                kind: EventKind::BehaviourStarted {
+                    task: a.index,
+                    behaviour: next.name().to_owned(),
+                },
+            });
+            a.current = Some(next);
+        }
+        let b = a.current.as_mut()?;
+        match b.step(now, est, vehicle) {
+            Step::Drive(cmd) => return Some(cmd),
+            Step::Done => a.current = None,
+        }
+    }
+}
+
+fn surface_name(s: SurfaceId) -> String {
+    s.name().to_owned()
 }
 
 enum TaskStep {

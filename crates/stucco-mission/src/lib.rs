@@ -32,14 +32,16 @@
 mod behaviour;
 mod executive;
 mod model;
+mod plaster;
 mod supervisor;
 mod task;
 
 pub use behaviour::{Behaviour, BehaviourKind, PivotPhase, Step, go_to};
 pub use executive::{
     Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode, OperatorCommand, Outputs,
-    Progress, ProgressMismatch, TaskStatus,
+    PARK_NOZZLE_M, Progress, ProgressMismatch, TaskStatus,
 };
-pub use model::{DoorEstimate, Estimate, WallGeometry, pose_at_wall};
+pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wall};
+pub use plaster::{Cursor, PlasterProgress, plan_digest};
 pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};
 pub use task::{OnTimeout, Side, TaskSpec, WallName};

@@ -40,6 +40,31 @@ pub struct Estimate {
     pub walls_seen: [usize; 4],
     /// The doors known.
     pub doors: Vec<DoorEstimate>,
+    /// Height of the ceiling, m.
+    #[serde(default = "default_height")]
+    pub height_m: f64,
+    /// The windows known.
+    #[serde(default)]
+    pub windows: Vec<WindowEstimate>,
+    /// What stands on the floor, as the scans show it.
+    #[serde(default)]
+    pub obstacles: Vec<stucco_plan::Obstacle>,
+}
+
+fn default_height() -> f64 {
+    2.6
+}
+
+/// A window of the room as the robot knows it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindowEstimate {
+    /// The wall it is in.
+    pub wall: WallName,
+    /// Its edges along the wall, m.
+    pub along_m: [f64; 2],
+    /// Its sill and head above the floor, m.
+    pub sill_head_m: [f64; 2],
 }
 
 /// A wall of the rectangular room: where its axis starts, which way it

@@ -264,6 +264,9 @@ mod tests {
             room_sigma_m: [0.01; 2],
             walls_seen: [0; 4],
             doors: Vec::new(),
+            height_m: 2.6,
+            windows: Vec::new(),
+            obstacles: Vec::new(),
         }
     }
 

@@ -51,6 +51,12 @@ fn approach() -> f64 {
 fn beyond() -> f64 {
     1.0
 }
+fn yes() -> bool {
+    true
+}
+fn settle() -> f64 {
+    1.0
+}
 
 /// One task of a mission. Positions are in the room frame (see
 /// [`WallName`]); a position along a wall runs along its axis (y for the
@@ -158,6 +164,27 @@ pub enum TaskSpec {
         #[serde(default = "drive_speed")]
         speed_mps: f64,
     },
+    /// Plasters the room's walls and ceiling with the mission's spray tool:
+    /// plans stations and strokes on the room as the robot knows it (its
+    /// size, doors, windows, what stands on the floor), then drives from
+    /// station to station and sprays. Done strokes are kept in the
+    /// checkpoint; a resumed run carries out the same plan from the next
+    /// stroke.
+    Plaster {
+        /// The walls to plaster.
+        #[serde(default = "all_walls")]
+        walls: Vec<WallName>,
+        /// Plaster the ceiling too.
+        #[serde(default = "yes")]
+        ceiling: bool,
+        /// Driving speed between stations, m/s.
+        #[serde(default = "follow_speed")]
+        speed_mps: f64,
+        /// Standing time at a station before spraying, for the estimate to
+        /// settle, s.
+        #[serde(default = "settle")]
+        settle_s: f64,
+    },
     /// Stops and waits for the operator's `continue`.
     WaitForOperator {
         /// What the operator is asked.
@@ -239,6 +266,7 @@ impl TaskSpec {
             TaskSpec::AlignToWall { .. } => "align_to_wall",
             TaskSpec::FollowWall { .. } => "follow_wall",
             TaskSpec::PassDoor { .. } => "pass_door",
+            TaskSpec::Plaster { .. } => "plaster",
             TaskSpec::WaitForOperator { .. } => "wait_for_operator",
         }
     }
@@ -289,6 +317,22 @@ impl TaskSpec {
                 }
                 if !positive(*timeout_s) {
                     return Some(("timeout_s", "must be positive"));
+                }
+            }
+            TaskSpec::Plaster {
+                walls,
+                ceiling,
+                speed_mps,
+                settle_s,
+            } => {
+                if walls.is_empty() && !ceiling {
+                    return Some(("walls", "nothing to plaster: no walls and no ceiling"));
+                }
+                if !speed(*speed_mps) {
+                    return Some(("speed_mps", SPEED));
+                }
+                if !(finite(*settle_s) && *settle_s >= 0.0) {
+                    return Some(("settle_s", "must be zero or more"));
                 }
             }
             TaskSpec::MoveRelative {

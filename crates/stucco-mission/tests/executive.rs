@@ -48,6 +48,9 @@ impl Robot {
             room_sigma_m: self.room_sigma,
             walls_seen: [100; 4],
             doors: self.doors.clone(),
+            height_m: 2.6,
+            windows: Vec::new(),
+            obstacles: Vec::new(),
         }
     }
 
@@ -102,6 +105,7 @@ fn executive(tasks: Vec<TaskSpec>, unattended: bool) -> Executive {
             gains: GainSchedule::default(),
             safety: SafetyConfig::default(),
             unattended,
+            spray: None,
         },
         tasks,
     )
@@ -830,6 +834,7 @@ fn a_lost_link_stops_a_jog_and_pauses_by_default() {
                     ..SafetyConfig::default()
                 },
                 unattended: false,
+                spray: None,
             },
             vec![forward(2.0)],
         );

@@ -1,0 +1,314 @@
+//! Plastering in a task mission: the simulated sprayer made from the
+//! mission's `[spray]` table, the plaster the simulator laid scored on the
+//! true surfaces of the robot's room, the world's plaster kept across a
+//! kill, and a thickness map per surface.
+
+use crate::task_mission::{RoomFrame, write_atomic};
+use anyhow::{Context, Result};
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use stucco_core::{ThicknessGrid, WallName};
+use stucco_plan::{
+    OpeningKind as PlanOpening, Plan, RoomModel, RoomScore, SprayTool, SurfaceId, SurfaceScore,
+    WallLine, WallOpening, score,
+};
+use stucco_sim::{Coat, Layout, OpeningKind, Simulator, SprayerSpec, SurfaceKind};
+
+/// Cells of the simulator's thickness grids, m (the issue asks ≤ 2 cm).
+pub const COAT_CELL_M: f64 = 0.02;
+
+/// The simulator's sprayer for the mission's tool.
+pub fn sprayer_of(tool: &SprayTool) -> SprayerSpec {
+    SprayerSpec {
+        flow_m3ps: tool.flow_m3ps(),
+        sigma_m: tool.footprint_sigma_m,
+        sigma_at_m: tool.wall_standoff_m,
+        axis_speed_mps: tool.axis_speed_mps,
+        cell_m: COAT_CELL_M,
+        park_m: stucco_mission::PARK_NOZZLE_M,
+    }
+}
+
+/// The robot's room as it truly is, in the room frame: what the plaster
+/// is scored on.
+pub(crate) fn true_room(layout: &Layout, frame: &RoomFrame) -> RoomModel {
+    let height_m = layout
+        .rooms
+        .iter()
+        .find(|r| r.name == frame.name)
+        .map_or(2.6, |r| r.height_m);
+    let openings = layout
+        .openings
+        .iter()
+        .filter(|o| o.room == frame.name)
+        .filter_map(|o| {
+            let e: Vec<nalgebra::Vector2<f64>> = o
+                .edges
+                .iter()
+                .map(|p| nalgebra::Vector2::new(p.x - frame.origin[0], p.y - frame.origin[1]))
+                .collect();
+            let mid = (e[0] + e[1]) / 2.0;
+            WallName::ALL.iter().find_map(|&w| {
+                let g = WallLine::of(w, frame.size_m);
+                (g.inward.dot(&(mid - g.origin)).abs() < 0.2).then(|| {
+                    let (a, b) = (
+                        g.along.dot(&(e[0] - g.origin)),
+                        g.along.dot(&(e[1] - g.origin)),
+                    );
+                    WallOpening {
+                        wall: w,
+                        kind: match o.kind {
+                            OpeningKind::OpenDoor | OpeningKind::ClosedDoor => PlanOpening::Door,
+                            OpeningKind::Window | OpeningKind::GlazedWindow => PlanOpening::Window,
+                        },
+                        along_m: [a.min(b), a.max(b)],
+                        sill_head_m: o.z,
+                    }
+                })
+            })
+        })
+        .collect();
+    RoomModel {
+        size_m: frame.size_m,
+        height_m,
+        openings,
+        obstacles: Vec::new(),
+    }
+}
+
+/// The plaster on each true surface of the room, resampled into the
+/// planner's surface frames (room frame, `PLAN` conventions) at the
+/// simulator's cell size.
+pub(crate) fn room_coats(
+    coats: &[Coat],
+    frame: &RoomFrame,
+    room: &RoomModel,
+) -> Vec<ThicknessGrid> {
+    let mine: Vec<&Coat> = coats.iter().filter(|c| c.room == frame.name).collect();
+    room.surfaces()
+        .iter()
+        .map(|s| {
+            let mut grid = ThicknessGrid::new(s.size_m(), COAT_CELL_M);
+            let nu = grid.cells[0];
+            for k in 0..grid.thickness_m.len() {
+                let uv = grid.center(k % nu, k / nu);
+                let p = s.frame.point(uv);
+                let world =
+                    nalgebra::Point3::new(p.x + frame.origin[0], p.y + frame.origin[1], p.z);
+                let on = mine.iter().find_map(|c| {
+                    let q = c.frame.uv(&world);
+                    let off = (world - c.frame.point(q)).norm();
+                    let [su, sv] = c.frame.size_m;
+                    (off < 0.01 && q[0] >= 0.0 && q[1] >= 0.0 && q[0] <= su && q[1] <= sv)
+                        .then_some((c, q))
+                });
+                if let Some((c, q)) = on {
+                    let i = ((q[0] / c.grid.cell_m) as usize).min(c.grid.cells[0] - 1);
+                    let j = ((q[1] / c.grid.cell_m) as usize).min(c.grid.cells[1] - 1);
+                    grid.thickness_m[k] = c.grid.at(i, j);
+                }
+            }
+            grid
+        })
+        .collect()
+}
+
+/// What a plastering run reports beyond the top-level scores.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlasterReport {
+    /// Stations planned.
+    pub stations: usize,
+    /// Each surface's scores, on the truth.
+    pub surfaces: Vec<SurfaceScore>,
+    /// Plasterable area the plan left unreached, m² (reported, not
+    /// scored).
+    pub unreachable_m2: f64,
+    /// Plaster sprayed, litres.
+    pub sprayed_l: f64,
+    /// What the plan itself predicted, on the room as the robot knew it.
+    pub predicted: PredictedScores,
+}
+
+/// The plan's own prediction.
+#[derive(Clone, Debug, Serialize)]
+pub struct PredictedScores {
+    /// Walls within tolerance, %.
+    pub wall_coverage_pct: f64,
+    /// Ceiling within tolerance, %.
+    pub ceiling_coverage_pct: f64,
+    /// Thickness CV.
+    pub thickness_cv: f64,
+}
+
+/// Scores the plaster the simulator laid in the robot's room against the
+/// plan's reach (what the plan reports unreachable is not counted).
+pub(crate) fn score_run(
+    sim: &Simulator,
+    layout: &Layout,
+    frame: &RoomFrame,
+    plan: &Plan,
+) -> RoomScore {
+    let room = true_room(layout, frame);
+    let grids = room_coats(sim.coats(), frame, &room);
+    let scores = room
+        .surfaces()
+        .iter()
+        .zip(&grids)
+        .filter_map(|(s, g)| plan.reach_of(s.id).map(|r| score(s, g, r, &plan.tool)))
+        .collect();
+    RoomScore::of(scores, sim.sprayed_m3() * 1000.0)
+}
+
+/// The least time plastering can take: the plasterable area the plan
+/// reaches at the tool's area rate, plus the straight-line travel between
+/// stations at the robot's top speed.
+pub fn time_lower_bound(plan: &Plan, start: &stucco_core::Pose2, top_speed_mps: f64) -> f64 {
+    let predicted = stucco_plan::predicted_score(plan);
+    let area: f64 = predicted.surfaces.iter().map(|s| s.plasterable_m2).sum();
+    let mut at = start.position();
+    let mut travel = 0.0;
+    for s in &plan.stations {
+        travel += (s.base.position() - at).norm();
+        at = s.base.position();
+    }
+    area / plan.tool.area_rate_m2ps() + travel / top_speed_mps
+}
+
+/// The world's plaster, kept across a kill so a resumed run scores the
+/// whole job (the plaster stays on the walls when the robot stops).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldState {
+    /// Coats with plaster on them: room, surface, grid.
+    pub coats: Vec<(String, SurfaceKindSer, ThicknessGrid)>,
+    /// Plaster sprayed so far, m³.
+    pub sprayed_m3: f64,
+}
+
+/// A surface's kind as the world state file writes it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceKindSer {
+    /// A wall by index.
+    Wall(usize),
+    /// The ceiling.
+    Ceiling,
+}
+
+impl WorldState {
+    /// The plaster of `sim`.
+    pub fn of(sim: &Simulator) -> WorldState {
+        WorldState {
+            coats: sim
+                .coats()
+                .iter()
+                .filter(|c| c.grid.volume_m3() > 0.0)
+                .map(|c| {
+                    let kind = match c.kind {
+                        SurfaceKind::Wall { index } => SurfaceKindSer::Wall(index),
+                        SurfaceKind::Ceiling => SurfaceKindSer::Ceiling,
+                    };
+                    (c.room.clone(), kind, c.grid.clone())
+                })
+                .collect(),
+            sprayed_m3: sim.sprayed_m3(),
+        }
+    }
+
+    /// Puts the plaster back on `sim`'s surfaces.
+    pub fn restore(&self, sim: &mut Simulator) {
+        let coats: Vec<(String, SurfaceKind, ThicknessGrid)> = self
+            .coats
+            .iter()
+            .map(|(room, k, g)| {
+                let kind = match k {
+                    SurfaceKindSer::Wall(index) => SurfaceKind::Wall { index: *index },
+                    SurfaceKindSer::Ceiling => SurfaceKind::Ceiling,
+                };
+                (room.clone(), kind, g.clone())
+            })
+            .collect();
+        sim.restore_coats(&coats, self.sprayed_m3);
+    }
+
+    /// Writes it atomically.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        write_atomic(path, serde_json::to_string(self)?.as_bytes())
+    }
+
+    /// Reads it back.
+    pub fn load(path: &Path) -> Result<WorldState> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a world state", path.display()))
+    }
+}
+
+/// Draws a thickness map of each surface of the room (`DIR/coat-NAME.svg`):
+/// thickness as colour from bare (white) through the coat (green) to
+/// double (red), openings outlined.
+pub(crate) fn draw_coats(
+    dir: &Path,
+    layout: &Layout,
+    frame: &RoomFrame,
+    sim: &Simulator,
+    tool: &SprayTool,
+) -> Result<()> {
+    let room = true_room(layout, frame);
+    let grids = room_coats(sim.coats(), frame, &room);
+    for (s, g) in room.surfaces().iter().zip(&grids) {
+        let name = match s.id {
+            SurfaceId::Ceiling => "ceiling",
+            SurfaceId::Wall(_) => s.id.name(),
+        };
+        let path = dir.join(format!("coat-{name}.svg"));
+        let [su, sv] = s.size_m();
+        let px = 160.0;
+        let size = ((su * px) as u32 + 80, (sv * px) as u32 + 70);
+        let root = SVGBackend::new(&path, size).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("{name}: plaster thickness (coat {} mm)", tool.thickness_mm),
+                ("sans-serif", 16),
+            )
+            .margin(8)
+            .x_label_area_size(28)
+            .y_label_area_size(36)
+            .build_cartesian_2d(0.0..su, 0.0..sv)?;
+        chart.configure_mesh().disable_mesh().draw()?;
+        let target = tool.thickness_m();
+        let c = g.cell_m;
+        chart.draw_series(g.iter().filter(|(_, t)| *t > 0.0).map(|(p, t)| {
+            let x = (t / target).clamp(0.0, 2.0);
+            let colour = if x < 1.0 - tool.tolerance {
+                RGBColor(255, (255.0 - 90.0 * x) as u8, (255.0 - 255.0 * x) as u8)
+            } else if x <= 1.0 + tool.tolerance {
+                RGBColor(60, 170, 80)
+            } else {
+                RGBColor(200, 40, 40)
+            };
+            Rectangle::new(
+                [
+                    (p[0] - c / 2.0, p[1] - c / 2.0),
+                    (p[0] + c / 2.0, p[1] + c / 2.0),
+                ],
+                colour.filled(),
+            )
+        }))?;
+        chart.draw_series(s.openings.iter().map(|o| {
+            Rectangle::new(
+                [
+                    (o.rect.u_m[0], o.rect.v_m[0]),
+                    (o.rect.u_m[1], o.rect.v_m[1]),
+                ],
+                BLACK.stroke_width(2),
+            )
+        }))?;
+        root.present()
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,176 @@
+//! The `plaster` task's own state: the plan it carries out, where it is in
+//! it (station, pass, move), and the nozzle's command at each tick.
+//!
+//! At each station the robot stands still; the nozzle first travels to the
+//! pass's first aim point with the spray off, then runs the pass's moves
+//! in time, each aim point turned into a nozzle position in the robot's
+//! frame from the estimate of the moment (so the footprint lands where the
+//! plan says even when the robot stands a little off its station). Time in
+//! a move only runs while spraying is allowed: when the supervisor holds
+//! the spray, the nozzle waits where it is and goes on after.
+
+use crate::model::Estimate;
+use nalgebra::{Point2, Point3, Vector3};
+use serde::{Deserialize, Serialize};
+use stucco_core::{Aim, Pose2, ToolCommand};
+use stucco_plan::{Lane, Plan, SurfaceId, WallLine};
+
+/// Where a plastering task is: the next spray move to carry out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cursor {
+    /// The station.
+    pub station: usize,
+    /// The pass at it.
+    pub pass: usize,
+    /// The move of the pass.
+    pub step: usize,
+}
+
+/// The progress of the `plaster` task under way, as a checkpoint keeps it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlasterProgress {
+    /// The task's index among the mission's.
+    pub task: usize,
+    /// Every move before this one is done.
+    pub cursor: Cursor,
+    /// Digest of the plan carried out (the plan itself is kept beside the
+    /// checkpoint): a resumed run must carry out the same one.
+    pub plan_digest: String,
+}
+
+/// What the nozzle does at a station.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Phase {
+    /// The robot on its way (behaviours in the queue).
+    Moving,
+    /// Standing, letting the estimate settle, since then.
+    Settling { left_s: f64 },
+    /// The nozzle travelling to the pass's first point, spray off.
+    Positioning { left_s: f64 },
+    /// In the cursor's move, this far into it.
+    Spraying { in_move_s: f64 },
+}
+
+/// The `plaster` task's state.
+#[derive(Clone, Debug)]
+pub(crate) struct PlasterRun {
+    pub plan: Plan,
+    pub cursor: Cursor,
+    pub phase: Phase,
+    /// Times the robot tried again to stand on the current station.
+    pub retries: usize,
+}
+
+impl PlasterRun {
+    /// True when every move is done.
+    pub fn finished(&self) -> bool {
+        self.cursor.station >= self.plan.stations.len()
+    }
+
+    /// Moves the cursor past its move; true when that ended a station.
+    pub fn advance(&mut self) -> bool {
+        let Some(station) = self.plan.stations.get(self.cursor.station) else {
+            return true;
+        };
+        let pass = &station.passes[self.cursor.pass];
+        self.cursor.step += 1;
+        if self.cursor.step < pass.moves.len() {
+            return false;
+        }
+        self.cursor.step = 0;
+        self.cursor.pass += 1;
+        if self.cursor.pass < station.passes.len() {
+            return false;
+        }
+        self.cursor.pass = 0;
+        self.cursor.station += 1;
+        true
+    }
+
+    /// The lane of station `k`, if there is one.
+    pub fn lane(&self, k: usize) -> Option<Lane> {
+        self.plan.stations.get(k).map(|s| s.lane)
+    }
+
+    /// The nozzle's command for aim point `uv` on `surface`, seen from
+    /// `pose`: placed so the spray, square to the robot, meets the surface
+    /// at the aim point from the standoff.
+    pub fn nozzle_for(
+        &self,
+        surface: SurfaceId,
+        uv: [f64; 2],
+        pose: &Pose2,
+        spray: bool,
+    ) -> Option<ToolCommand> {
+        let s = self.plan.surface(surface)?;
+        let tool = &self.plan.tool;
+        let target = s.frame.point(uv);
+        let (aim, standoff) = if s.is_ceiling() {
+            (Aim::Up, tool.ceiling_standoff_m)
+        } else {
+            (Aim::Left, tool.wall_standoff_m)
+        };
+        let d = aim.direction();
+        let (c, si) = (pose.theta.cos(), pose.theta.sin());
+        let dir = Vector3::new(c * d.x - si * d.y, si * d.x + c * d.y, d.z);
+        let toward = -s.into_room(&self.plan.room);
+        let square = dir.dot(&toward);
+        if square < 0.5 {
+            // The robot does not face the surface (more than 60° off).
+            return None;
+        }
+        let nozzle: Point3<f64> = target - dir * (standoff / square);
+        let local = pose
+            .inverse()
+            .transform_point(&Point2::new(nozzle.x, nozzle.y));
+        let clamp = |x: f64, r: [f64; 2]| x.clamp(r[0], r[1]);
+        Some(ToolCommand {
+            nozzle_m: [
+                clamp(local.x, tool.rail_m),
+                clamp(local.y, tool.arm_m),
+                clamp(nozzle.z, tool.lift_m),
+            ],
+            aim,
+            spray,
+        })
+    }
+
+    /// Where the nozzle should be at the cursor now, and whether plaster
+    /// flows.
+    pub fn command(&self, in_move_s: f64, est: &Estimate) -> Option<ToolCommand> {
+        let station = self.plan.stations.get(self.cursor.station)?;
+        let pass = station.passes.get(self.cursor.pass)?;
+        let m = pass.moves.get(self.cursor.step)?;
+        self.nozzle_for(pass.surface, m.at(in_move_s), &est.pose, m.spray)
+    }
+
+    /// The nozzle's command at the start of the cursor's pass move.
+    pub fn first_point(&self, est: &Estimate) -> Option<ToolCommand> {
+        self.command(0.0, est).map(ToolCommand::off)
+    }
+
+    /// The wall line of station `k`'s lane, with the distance from it the
+    /// robot's line runs at (middle lanes: the south wall's line).
+    pub fn lane_line(&self, k: usize) -> Option<(WallLine, f64)> {
+        let s = self.plan.stations.get(k)?;
+        let room = self.plan.room.size_m;
+        Some(match s.lane {
+            Lane::Wall(w) => (WallLine::of(w, room), self.plan.tool.robot_standoff_m),
+            Lane::Middle(_) => (WallLine::of(stucco_core::WallName::South, room), s.base.y),
+        })
+    }
+}
+
+/// A short digest of a plan, to match a checkpoint to the plan beside it.
+pub fn plan_digest(plan: &Plan) -> String {
+    // FNV-1a over the plan's JSON: stable across runs and platforms.
+    let text = serde_json::to_string(plan).unwrap_or_default();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
