@@ -88,14 +88,15 @@ pub struct CameraSpec {
 }
 
 impl Default for CameraSpec {
-    /// Looking left, from 35° below the horizontal to straight up.
+    /// Looking left, from 35° below the horizontal to straight up, 20
+    /// profiles a second (a line scanner turned on its side).
     fn default() -> Self {
         CameraSpec {
             name: "range-camera".to_owned(),
             azimuth_rad: std::f64::consts::FRAC_PI_2,
             elevation_rad: [-0.6, std::f64::consts::FRAC_PI_2],
             rays: 96,
-            rate_hz: 5.0,
+            rate_hz: 20.0,
             height_m: 1.0,
             range_sigma_m: 0.01,
             max_range_m: 8.0,

@@ -5,7 +5,7 @@
 
 use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_control::Limiter;
-use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, ToolCommand};
+use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, ToolCommand, Twist2};
 use stucco_mission::{DoorEstimate, Estimate, WallGeometry, WallName, WindowEstimate};
 use stucco_nav::{
     DoorConfig, DoorOpening, OdometryConfig, ProfilePose, RoomConfig, RoomCovariance, RoomEkf,
@@ -59,6 +59,9 @@ pub struct Navigator {
 const CEILING_SAMPLES: usize = 400;
 /// Cells of the floor map, m.
 const FLOOR_CELL_M: f64 = 0.05;
+/// Largest σ of the position (and of the best-known side of the room)
+/// for a scan to go into the floor map, m.
+const FLOOR_MAX_SIGMA_M: f64 = 0.02;
 /// Echoes a cell needs to count as something standing there.
 const FLOOR_HITS: u32 = 20;
 /// Height assumed for what stands on the floor (the laser sees its
@@ -231,9 +234,22 @@ impl Navigator {
 
     /// Counts the scan's echoes that lie inside the room, off its walls,
     /// in the floor map.
-    fn note_floor(&mut self, pts: &ScanPoints) {
+    fn note_floor(&mut self, pts: &ScanPoints, twist: &stucco_core::Twist2, stamp: Stamp) {
         let est = self.mission_estimate();
-        let laser = est.pose * self.mount;
+        // Only while the robot knows where it is in a room it has
+        // measured: echoes placed from a loose estimate would smear walls
+        // into the room.
+        if est.position_sigma_m > FLOOR_MAX_SIGMA_M
+            || est.room_sigma_m.iter().fold(f64::MAX, |a, &b| a.min(b)) > FLOOR_MAX_SIGMA_M
+        {
+            return;
+        }
+        // The echoes are placed from the pose the scan was taken at (its
+        // first beam), the estimate's pose moved back by the motion since.
+        let back = est.stamp.seconds_since(stamp).max(0.0);
+        let then = est.pose
+            * Twist2::new(-twist.vx_mps, -twist.vy_mps, -twist.omega_radps).displacement(back);
+        let laser = then * self.mount;
         let [xs, ys] = est.room_m;
         for q in pts.points() {
             let p = laser.transform_point(&q.p);
@@ -388,7 +404,8 @@ impl Navigator {
                     self.note_openings(&doors);
                 }
             }
-            self.note_floor(&pts);
+            let robot_twist = twist_at(&self.samples, scan.stamp, &self.odometry);
+            self.note_floor(&pts, &robot_twist, scan.stamp);
             self.floor_boxes = self.floor_obstacles();
             self.obstacles.clear();
             self.obstacles.extend(

@@ -142,7 +142,9 @@ pub struct PredictedScores {
 }
 
 /// Scores the plaster the simulator laid in the robot's room against the
-/// plan's reach (what the plan reports unreachable is not counted).
+/// plan's reach (what the plan reports unreachable is not counted), less
+/// the robot's position tolerance along the reach's borders: the map's
+/// frame, where the plan was made, may sit that far off the true one.
 pub(crate) fn score_run(
     sim: &Simulator,
     layout: &Layout,
@@ -155,7 +157,10 @@ pub(crate) fn score_run(
         .surfaces()
         .iter()
         .zip(&grids)
-        .filter_map(|(s, g)| plan.reach_of(s.id).map(|r| score(s, g, r, &plan.tool)))
+        .filter_map(|(s, g)| {
+            let reach = plan.reach_of(s.id)?.eroded(plan.tool.position_tolerance_m);
+            Some(score(s, g, &reach, &plan.tool))
+        })
         .collect();
     RoomScore::of(scores, sim.sprayed_m3() * 1000.0)
 }

@@ -102,6 +102,8 @@ pub struct PassReport {
     pub samples: usize,
 }
 
+/// An opening the camera finds this near the floor is a door, m.
+const DOOR_SILL_M: f64 = 0.1;
 /// The plan a plastering run carries out, beside its checkpoint.
 const PLAN_FILE: &str = "plan.json";
 /// The world's plaster when the run stopped (kept for a resumed run).
@@ -655,11 +657,19 @@ fn run_once(
         if out_.checkpoint_due {
             save(&exec, &nav)?;
         }
-        if plan_seen.is_none() {
+        // The plan scored is the last one made (a survey makes it again).
+        if out_
+            .events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::PlanMade { .. }))
+        {
             plan_seen = exec.plaster_plan().cloned();
-            if plan_seen.is_some() {
+            if plaster_start.is_none() {
                 plaster_start = Some(nav.mission_estimate().pose);
             }
+        }
+        if plan_seen.is_none() && resume.is_some() {
+            plan_seen = exec.plaster_plan().cloned();
         }
         nav.tool(out_.tool);
         if exec.mode().is_final() {
@@ -780,9 +790,11 @@ fn run_once(
             })
         })
         .collect();
+    // Openings reaching the floor are doors, not windows.
     let windows: Vec<WindowReport> = nav
         .windows()
         .into_iter()
+        .filter(|(_, w)| w.sill_head_m[0] >= DOOR_SILL_M)
         .map(|(wall, w)| {
             let truth = true_windows.iter().find(|(tw, a, z)| {
                 *tw == wall

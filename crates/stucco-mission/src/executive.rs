@@ -15,13 +15,16 @@ use stucco_core::{
     Ack, Command, DriveCommand, Pose2, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec,
     wrap_angle,
 };
-use stucco_plan::{OpeningKind, Plan, RoomModel, SprayTool, SurfaceId, WallOpening};
+use stucco_plan::{Lane, OpeningKind, Plan, RoomModel, SprayTool, SurfaceId, WallOpening};
 
 /// Heading off a station the gantry's geometry takes without a second
 /// approach, rad (2°).
 const HEADING_SPARE_RAD: f64 = 0.035;
 /// How far a robot turned on its station backs off to come on again, m.
 const REALIGN_M: f64 = 1.0;
+/// An opening whose bottom the camera finds this near the floor is a
+/// door, m.
+const DOOR_SILL_M: f64 = 0.1;
 
 /// Where the nozzle waits while the robot drives, robot frame, m: over
 /// the body.
@@ -215,6 +218,15 @@ pub enum EventKind {
         station: usize,
         /// The surface.
         surface: String,
+    },
+    /// A plastering plan was made (again, after a survey).
+    PlanMade {
+        /// The task.
+        task: usize,
+        /// Its stations.
+        stations: usize,
+        /// Plasterable area it cannot reach, m².
+        unreachable_m2: f64,
     },
     /// An operator command could not be followed.
     CommandRefused {
@@ -1011,18 +1023,31 @@ impl Executive {
             walls,
             ceiling,
             speed_mps,
+            survey,
             ..
         } = self.tasks[index].clone()
         {
-            let run = self.plaster_run(index, &walls, ceiling, est)?;
-            queue.extend(station_way(
-                &self.config.gains,
-                clearance,
-                &run,
-                run.cursor.station,
-                &pose,
-                speed_mps,
-            ));
+            let resumed = self
+                .resume_plaster
+                .as_ref()
+                .is_some_and(|(p, _)| p.task == index);
+            let mut run = self.plaster_run(index, &walls, ceiling, est)?;
+            let gains = &self.config.gains;
+            if survey && !resumed {
+                queue.extend(survey_way(gains, clearance, &run, &pose, speed_mps));
+                run.phase = Phase::Surveying;
+            } else {
+                let k = run.cursor.station;
+                queue.extend(station_way(gains, clearance, &run, k, &pose, speed_mps));
+            }
+            self.emit(
+                now,
+                EventKind::PlanMade {
+                    task: index,
+                    stations: run.plan.stations.len(),
+                    unreachable_m2: run.plan.unreachable.iter().map(|u| u.area_m2).sum(),
+                },
+            );
             plaster = Some(run);
         }
         let gains = &self.config.gains;
@@ -1272,45 +1297,13 @@ impl Executive {
                 retries: 0,
             });
         }
-        let Some(tool) = self.config.spray.clone() else {
-            return Err("plaster: the mission has no [spray] tool".to_owned());
-        };
-        let door_width = |w: Option<f64>| w.unwrap_or(0.9);
-        let mut openings: Vec<WallOpening> = est
-            .doors
-            .iter()
-            .map(|d| {
-                let half = door_width(d.width_m) / 2.0;
-                WallOpening {
-                    wall: d.wall,
-                    kind: OpeningKind::Door,
-                    along_m: [d.position_m - half, d.position_m + half],
-                    sill_head_m: [0.0, tool.door_head_m],
-                }
-            })
-            .collect();
-        openings.extend(est.windows.iter().map(|w| WallOpening {
-            wall: w.wall,
-            kind: OpeningKind::Window,
-            along_m: w.along_m,
-            sill_head_m: w.sill_head_m,
-        }));
-        let room = RoomModel {
-            size_m: est.room_m,
-            height_m: est.height_m,
-            openings,
-            obstacles: est.obstacles.clone(),
-        };
-        let mut plan = stucco_plan::plan(&room, &tool, &self.config.vehicle, &est.pose)
-            .map_err(|e| format!("plaster: {e}"))?;
-        let wanted = |s: SurfaceId| match s {
-            SurfaceId::Wall(w) => walls.contains(&w),
-            SurfaceId::Ceiling => ceiling,
-        };
-        for station in &mut plan.stations {
-            station.passes.retain(|p| wanted(p.surface));
-        }
-        plan.stations.retain(|s| !s.passes.is_empty());
+        let plan = plan_room(
+            self.config.spray.as_ref(),
+            &self.config.vehicle,
+            walls,
+            ceiling,
+            est,
+        )?;
         Ok(PlasterRun {
             plan,
             cursor: Cursor::default(),
@@ -1321,8 +1314,16 @@ impl Executive {
 
     /// Steps a `plaster` task: the way to a station, settling there, the
     /// nozzle to its first point, then the pass's moves in time.
-    fn step_plaster(&mut self, now: Stamp, est: &Estimate, speed: f64, settle: f64) -> TaskStep {
+    fn step_plaster(
+        &mut self,
+        now: Stamp,
+        est: &Estimate,
+        speed: f64,
+        settle: f64,
+        (walls, ceiling): (&[WallName], bool),
+    ) -> TaskStep {
         let vehicle = self.config.vehicle.clone();
+        let spray_tool = self.config.spray.clone();
         let gains = self.config.gains.clone();
         let clearance = self.pivot_clearance();
         let dt = self.dt;
@@ -1343,6 +1344,35 @@ impl Executive {
             ..ToolCommand::default()
         };
         match run.phase {
+            Phase::Surveying => {
+                if let Some(cmd) = step_behaviours(a, now, est, &vehicle, &mut self.events) {
+                    self.tool = park;
+                    return TaskStep::Drive(cmd);
+                }
+                // Every wall seen from its standoff: plan on what was found.
+                let plan = match plan_room(spray_tool.as_ref(), &vehicle, walls, ceiling, est) {
+                    Ok(p) => p,
+                    Err(e) => return TaskStep::Failed(e),
+                };
+                let Some(run) = a.plaster.as_mut() else {
+                    return TaskStep::Failed("plaster: no plan".to_owned());
+                };
+                self.events.push(Event {
+                    stamp: now,
+                    kind: EventKind::PlanMade {
+                        task: index,
+                        stations: plan.stations.len(),
+                        unreachable_m2: plan.unreachable.iter().map(|u| u.area_m2).sum(),
+                    },
+                });
+                run.plan = plan;
+                run.cursor = Cursor::default();
+                run.phase = Phase::Moving;
+                let way = station_way(&gains, clearance, run, 0, &est.pose, speed);
+                a.queue.extend(way);
+                self.tool = park;
+                TaskStep::Drive(DriveCommand::STOP)
+            }
             Phase::Moving => {
                 if let Some(cmd) = step_behaviours(a, now, est, &vehicle, &mut self.events) {
                     self.tool = park;
@@ -1515,11 +1545,14 @@ impl Executive {
         if let TaskSpec::Plaster {
             speed_mps,
             settle_s,
+            walls,
+            ceiling,
             ..
         } = spec
         {
             let (speed, settle) = (*speed_mps, *settle_s);
-            return self.step_plaster(now, est, speed, settle);
+            let (walls, ceiling) = (walls.clone(), *ceiling);
+            return self.step_plaster(now, est, speed, settle, (&walls, ceiling));
         }
         let elapsed = now.seconds_since(a.started);
         // Task-level ends: timeouts and the conditions behaviours do not see.
@@ -1646,6 +1679,79 @@ impl Executive {
     }
 }
 
+/// A plastering plan for `walls` (and the ceiling) on the room as `est`
+/// knows it. Openings the camera found come with their own top (one
+/// reaching the floor is a door); a door only the laser found gets the
+/// tool's `door_head_m`.
+fn plan_room(
+    tool: Option<&SprayTool>,
+    vehicle: &VehicleSpec,
+    walls: &[WallName],
+    ceiling: bool,
+    est: &Estimate,
+) -> Result<Plan, String> {
+    let Some(tool) = tool else {
+        return Err("plaster: the mission has no [spray] tool".to_owned());
+    };
+    let mut openings: Vec<WallOpening> = est
+        .windows
+        .iter()
+        .map(|w| WallOpening {
+            wall: w.wall,
+            kind: if w.sill_head_m[0] < DOOR_SILL_M {
+                OpeningKind::Door
+            } else {
+                OpeningKind::Window
+            },
+            along_m: w.along_m,
+            sill_head_m: if w.sill_head_m[0] < DOOR_SILL_M {
+                [0.0, w.sill_head_m[1]]
+            } else {
+                w.sill_head_m
+            },
+        })
+        .collect();
+    for d in &est.doors {
+        let half = d.width_m.unwrap_or(0.9) / 2.0;
+        let along = [d.position_m - half, d.position_m + half];
+        // The laser and the camera may each see part of a door: the
+        // opening is what either saw, as high as the camera saw it.
+        match openings
+            .iter_mut()
+            .find(|o| o.wall == d.wall && o.along_m[0] < along[1] && along[0] < o.along_m[1])
+        {
+            Some(o) => {
+                o.kind = OpeningKind::Door;
+                o.along_m = [o.along_m[0].min(along[0]), o.along_m[1].max(along[1])];
+                o.sill_head_m[0] = 0.0;
+            }
+            None => openings.push(WallOpening {
+                wall: d.wall,
+                kind: OpeningKind::Door,
+                along_m: along,
+                sill_head_m: [0.0, tool.door_head_m],
+            }),
+        }
+    }
+    let room = RoomModel {
+        size_m: est.room_m,
+        height_m: est.height_m,
+        openings,
+        obstacles: est.obstacles.clone(),
+    };
+    let mut plan =
+        stucco_plan::plan(&room, tool, vehicle, &est.pose).map_err(|e| format!("plaster: {e}"))?;
+    let wanted = |s: SurfaceId| match s {
+        SurfaceId::Wall(w) => walls.contains(&w),
+        SurfaceId::Ceiling => ceiling,
+    };
+    for station in &mut plan.stations {
+        station.passes.retain(|p| wanted(p.surface));
+    }
+    plan.stations.retain(|s| !s.passes.is_empty());
+    Ok(plan)
+}
+
 /// The way from `from` to station `k`: along its lane when the robot is
 /// on it already (forward or backing), else onto the lane where the robot
 /// can turn (`clearance` from every wall), and along it to the station.
@@ -1672,14 +1778,26 @@ fn station_way(
             Behaviour::reverse_to(gains, goal, speed)
         }];
     }
+    let Some(entry) = lane_entry(clearance, run, k) else {
+        return Vec::new();
+    };
+    let mut way = go_to(gains, from, &entry, speed);
+    way.push(Behaviour::regulate(gains, goal, speed));
+    way
+}
+
+/// Where the robot comes onto the lane of station `k`: a run-in before
+/// the station, `clearance` from every wall so it can turn there.
+fn lane_entry(clearance: f64, run: &PlasterRun, k: usize) -> Option<Pose2> {
+    let goal = run.plan.stations.get(k)?.base;
+    let (line, dist) = run.lane_line(k)?;
+    let heading = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
     let dir = line.along.dot(&heading).signum();
     let at = line.along.dot(&(goal.position().coords - line.origin));
     let (lo, hi) = (clearance, line.length_m - clearance);
     let entry_at = (at - dir * RUN_IN_M).clamp(lo.min(hi), hi.max(lo));
     let e = line.point(entry_at, dist.max(clearance));
-    let mut way = go_to(gains, from, &Pose2::new(e.x, e.y, goal.theta), speed);
-    way.push(Behaviour::regulate(gains, goal, speed));
-    way
+    Some(Pose2::new(e.x, e.y, goal.theta))
 }
 
 /// Out of the lane of station `k` (the robot at `from` on it) to where it
@@ -1707,6 +1825,49 @@ fn lane_exit(
         Pose2::new(o.x, o.y, from.theta),
         speed,
     )]
+}
+
+/// A look at every wall the plan plasters from its standoff before the
+/// plan is made again on what the camera found there: onto each wall's
+/// lane to its far station, back along it to where the robot came on, and
+/// out to where it can turn.
+fn survey_way(
+    gains: &GainSchedule,
+    clearance: f64,
+    run: &PlasterRun,
+    from: &Pose2,
+    speed: f64,
+) -> Vec<Behaviour> {
+    let mut way = Vec::new();
+    let mut at = *from;
+    let mut last_lane = None;
+    for (k, station) in run.plan.stations.iter().enumerate() {
+        if !matches!(station.lane, Lane::Wall(_)) || last_lane == Some(station.lane) {
+            continue;
+        }
+        last_lane = Some(station.lane);
+        let Some(entry) = lane_entry(clearance, run, k) else {
+            continue;
+        };
+        way.extend(station_way(gains, clearance, run, k, &at, speed));
+        let Some((line, dist)) = run.lane_line(k) else {
+            continue;
+        };
+        let along = line.along.dot(&(entry.position().coords - line.origin));
+        let back = line.point(along, dist);
+        let back = Pose2::new(back.x, back.y, station.base.theta);
+        way.push(Behaviour::reverse_to(gains, back, speed));
+        let out = lane_exit(gains, clearance, run, k, &back, speed);
+        at = out
+            .last()
+            .and_then(|b| match b.kind() {
+                BehaviourKind::Regulate { goal } => Some(*goal),
+                _ => None,
+            })
+            .unwrap_or(back);
+        way.extend(out);
+    }
+    way
 }
 
 /// Runs the behaviours of `a`'s queue: the command of the one under way,

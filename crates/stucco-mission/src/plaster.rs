@@ -43,6 +43,8 @@ pub struct PlasterProgress {
 /// What the nozzle does at a station.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Phase {
+    /// Looking at the walls before the plan is made again.
+    Surveying,
     /// The robot on its way (behaviours in the queue).
     Moving,
     /// Standing, letting the estimate settle, since then.

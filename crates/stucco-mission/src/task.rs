@@ -184,6 +184,10 @@ pub enum TaskSpec {
         /// settle, s.
         #[serde(default = "settle")]
         settle_s: f64,
+        /// First drive along each wall at the standoff, the camera finding
+        /// its windows and doors, and plan on what it found.
+        #[serde(default = "yes")]
+        survey: bool,
     },
     /// Stops and waits for the operator's `continue`.
     WaitForOperator {
@@ -324,6 +328,7 @@ impl TaskSpec {
                 ceiling,
                 speed_mps,
                 settle_s,
+                ..
             } => {
                 if walls.is_empty() && !ceiling {
                     return Some(("walls", "nothing to plaster: no walls and no ceiling"));

@@ -290,9 +290,14 @@ fn gaps_in(
         while i < kinds.len() && kinds[i] == Ray::Through {
             i += 1;
         }
-        // Bounded by the face on both sides, or no edge is known.
-        if start == 0 || i >= kinds.len() || kinds[start - 1] != Ray::Face || kinds[i] != Ray::Face
-        {
+        // Bounded by the face above; below, by the face, or by nothing
+        // when the hole reaches under the fan's lowest ray (a door: its
+        // bottom is the floor).
+        if i >= kinds.len() || kinds[i] != Ray::Face {
+            continue;
+        }
+        let door = start == 0 && face_z[0] > 0.0;
+        if !door && kinds[start - 1] != Ray::Face {
             continue;
         }
         // Each edge lies between its face ray and its first through ray.
@@ -320,7 +325,11 @@ fn gaps_in(
             let n = k as isize + toward;
             (n >= start as isize && n < i as isize).then_some(n as usize)
         };
-        let z0 = edge(start - 1, start, inner(start, 1));
+        let z0 = if door {
+            0.0
+        } else {
+            edge(start - 1, start, inner(start, 1))
+        };
         let z1 = edge(i, i - 1, inner(i - 1, -1));
         out.push(Gap {
             along_m: 0.0,

@@ -133,6 +133,39 @@ pub struct ReachMask {
 }
 
 impl ReachMask {
+    /// The mask less a band `d_m` wide along every border of what it
+    /// reaches: where the plan's frame may sit `d_m` off the truth.
+    pub fn eroded(&self, d_m: f64) -> ReachMask {
+        let [nu, nv] = self.cells;
+        let r = (d_m / self.cell_m).round() as i64;
+        let at = |i: i64, j: i64| {
+            i < 0
+                || j < 0
+                || i >= nu as i64
+                || j >= nv as i64
+                || self.reached[j as usize * nu + i as usize]
+        };
+        let mut reached = self.reached.clone();
+        for j in 0..nv as i64 {
+            for i in 0..nu as i64 {
+                if !at(i, j) {
+                    continue;
+                }
+                let near_gap = (-r..=r)
+                    .flat_map(|dj| (-r..=r).map(move |di| (di, dj)))
+                    .filter(|(di, dj)| di * di + dj * dj <= r * r)
+                    .any(|(di, dj)| !at(i + di, j + dj));
+                if near_gap {
+                    reached[j as usize * nu + i as usize] = false;
+                }
+            }
+        }
+        ReachMask {
+            reached,
+            ..self.clone()
+        }
+    }
+
     /// True when the point `uv` lies in a reached cell; outside the mask,
     /// false.
     pub fn reaches(&self, uv: [f64; 2]) -> bool {
