@@ -15,7 +15,7 @@ use stucco_core::{
     Ack, Command, DriveCommand, Pose2, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec,
     wrap_angle,
 };
-use stucco_plan::{Lane, OpeningKind, Plan, RoomModel, SprayTool, SurfaceId, WallOpening};
+use stucco_plan::{OpeningKind, Plan, RoomModel, SprayTool, SurfaceId, WallOpening};
 
 /// Heading off a station the gantry's geometry takes without a second
 /// approach, rad (2°).
@@ -1034,7 +1034,13 @@ impl Executive {
             let mut run = self.plaster_run(index, &walls, ceiling, est)?;
             let gains = &self.config.gains;
             if survey && !resumed {
-                queue.extend(survey_way(gains, clearance, &run, &pose, speed_mps));
+                queue.extend(survey_way(
+                    gains,
+                    clearance,
+                    &self.config.vehicle,
+                    est,
+                    speed_mps,
+                ));
                 run.phase = Phase::Surveying;
             } else {
                 let k = run.cursor.station;
@@ -1827,46 +1833,64 @@ fn lane_exit(
     )]
 }
 
-/// A look at every wall the plan plasters from its standoff before the
-/// plan is made again on what the camera found there: onto each wall's
-/// lane to its far station, back along it to where the robot came on, and
-/// out to where it can turn.
+/// A look at every wall before the plan is made again on what the camera
+/// found: one loop round the room, clockwise so the camera (looking left)
+/// faces each wall in turn, `clearance` from the walls (the robot turns at
+/// its corners) and clear of what stands on the floor.
 fn survey_way(
     gains: &GainSchedule,
     clearance: f64,
-    run: &PlasterRun,
-    from: &Pose2,
+    vehicle: &VehicleSpec,
+    est: &Estimate,
     speed: f64,
 ) -> Vec<Behaviour> {
-    let mut way = Vec::new();
-    let mut at = *from;
-    let mut last_lane = None;
-    for (k, station) in run.plan.stations.iter().enumerate() {
-        if !matches!(station.lane, Lane::Wall(_)) || last_lane == Some(station.lane) {
-            continue;
+    let [xs, ys] = est.room_m;
+    // What the body reaches toward the furniture beside the loop's long
+    // sides (half its width) and at its ends (its front, turning).
+    let side = 0.5 * vehicle.width_m + 0.15;
+    let front = vehicle.length_m - vehicle.rear_overhang_m + 0.15;
+    let (half_x, half_y) = if xs >= ys {
+        (front, side)
+    } else {
+        (side, front)
+    };
+    // The loop's ends stand off a little more: its corners are turned
+    // on the move, the front swinging out past them.
+    let ends = clearance + 0.2;
+    let (mut x0, mut x1, mut y0, mut y1) = if xs >= ys {
+        (ends, xs - ends, clearance, ys - clearance)
+    } else {
+        (clearance, xs - clearance, ends, ys - ends)
+    };
+    // Keep each side of the loop off the furniture near its wall.
+    for o in &est.obstacles {
+        let (cx, cy) = (
+            0.5 * (o.min_m[0] + o.max_m[0]),
+            0.5 * (o.min_m[1] + o.max_m[1]),
+        );
+        if cx < 0.5 * xs && o.max_m[0] + half_x > x0 && o.max_m[0] < 0.5 * xs {
+            x0 = o.max_m[0] + half_x;
         }
-        last_lane = Some(station.lane);
-        let Some(entry) = lane_entry(clearance, run, k) else {
-            continue;
-        };
-        way.extend(station_way(gains, clearance, run, k, &at, speed));
-        let Some((line, dist)) = run.lane_line(k) else {
-            continue;
-        };
-        let along = line.along.dot(&(entry.position().coords - line.origin));
-        let back = line.point(along, dist);
-        let back = Pose2::new(back.x, back.y, station.base.theta);
-        way.push(Behaviour::reverse_to(gains, back, speed));
-        let out = lane_exit(gains, clearance, run, k, &back, speed);
-        at = out
-            .last()
-            .and_then(|b| match b.kind() {
-                BehaviourKind::Regulate { goal } => Some(*goal),
-                _ => None,
-            })
-            .unwrap_or(back);
-        way.extend(out);
+        if cx > 0.5 * xs && o.min_m[0] - half_x < x1 && o.min_m[0] > 0.5 * xs {
+            x1 = o.min_m[0] - half_x;
+        }
+        if cy < 0.5 * ys && o.max_m[1] + half_y > y0 && o.max_m[1] < 0.5 * ys {
+            y0 = o.max_m[1] + half_y;
+        }
+        if cy > 0.5 * ys && o.min_m[1] - half_y < y1 && o.min_m[1] > 0.5 * ys {
+            y1 = o.min_m[1] - half_y;
+        }
     }
+    if x1 - x0 < 0.3 || y1 - y0 < 0.3 {
+        return Vec::new();
+    }
+    // West along the south side first: the camera on the south wall.
+    let corners = [[x1, y0], [x0, y0], [x0, y1], [x1, y1]];
+    let path = closed(&corners);
+    let (a, b) = (path[0], path[1]);
+    let start = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
+    let mut way = go_to(gains, &est.pose, &start, speed);
+    way.push(Behaviour::path(gains, path, speed));
     way
 }
 
