@@ -6,6 +6,7 @@ mod corridor;
 mod door_passage;
 mod link;
 mod missions;
+mod plastering;
 mod walls_on_real_logs;
 
 /// `stucco run` on `missions/<name>.toml`, with the mission's own seed and

@@ -39,6 +39,8 @@ pub struct Navigator {
     discover_doors: bool,
     /// Scans each room wall has been used in.
     walls_seen: [usize; 4],
+    /// Camera profiles each room wall has been measured in.
+    camera_walls_seen: [usize; 4],
     /// Scans taken in.
     scans: u64,
     /// The range camera, if the robot has one.
@@ -67,6 +69,17 @@ const FLOOR_HITS: u32 = 20;
 /// Height assumed for what stands on the floor (the laser sees its
 /// footprint, not its top), m.
 pub const OBSTACLE_HEIGHT_M: f64 = 1.0;
+
+/// Heights of a wall the camera measures it at: above furniture, below
+/// the ceiling's edge (from the ceiling down), m.
+const CAMERA_WALL_BAND_M: [f64; 2] = [1.2, 0.3];
+/// Laser scans a wall must have been used in for the camera to leave it
+/// to the laser.
+const LASER_SEES_WALL: usize = 20;
+/// Rays that must meet the wall there for a measurement.
+const CAMERA_WALL_RAYS: usize = 8;
+/// σ of the camera's distance to a wall, m (its rays' median).
+const CAMERA_WALL_SIGMA_M: f64 = 0.01;
 
 /// Smallest cosine between the camera's fan and a wall's normal for the
 /// profile to count for that wall.
@@ -140,6 +153,7 @@ impl Navigator {
             door_widths: Vec::new(),
             discover_doors: false,
             walls_seen: [0; 4],
+            camera_walls_seen: [0; 4],
             scans: 0,
             camera,
             windows: std::array::from_fn(|_| WindowFinder::new(WindowConfig::default())),
@@ -444,7 +458,7 @@ impl Navigator {
     /// at (on the estimate at hand); a change of wall ends the last one's
     /// pass.
     fn look_for_windows(&mut self, profile: &stucco_core::RangeProfile) {
-        let Some(cam) = &self.camera else {
+        let Some(cam_height_m) = self.camera.as_ref().map(|c| c.height_m) else {
             return;
         };
         let est = self.mission_estimate();
@@ -460,7 +474,7 @@ impl Navigator {
                     ProfilePose {
                         along_m: g.position(&p),
                         distance_m: g.distance(&p),
-                        height_m: cam.height_m,
+                        height_m: cam_height_m,
                         direction: nalgebra::Vector2::new(toward, h.dot(&g.along)),
                     },
                 )
@@ -474,17 +488,79 @@ impl Navigator {
         }
         self.camera_wall = now;
         if let Some((w, pose)) = target {
+            self.camera_wall_update(profile, w, &pose, &est);
             // Rays that end short of the wall, looking up, hit the ceiling.
             for (el, r) in profile.elevations_rad.iter().zip(&profile.ranges_m) {
                 let across = r * el.cos() * pose.direction.x;
                 if *el > 0.3 && r.is_finite() && across < pose.distance_m - 0.1 {
-                    self.ceiling_m.push_back(cam.height_m + r * el.sin());
+                    self.ceiling_m.push_back(cam_height_m + r * el.sin());
                     if self.ceiling_m.len() > CEILING_SAMPLES {
                         self.ceiling_m.pop_front();
                     }
                 }
             }
             self.windows[w].add(profile, &pose);
+        }
+    }
+
+    /// The wall the camera faces, when the laser has not seen it, measured
+    /// where it stands clear of the furniture (its upper part) and handed
+    /// to the room filter: the
+    /// distance along the fan, turned into the laser's `(d, γ)` with the
+    /// estimate's heading (which this measurement does not inform: its γ
+    /// gets a radian of σ). A wall hidden from the laser by a sofa is
+    /// measured so.
+    fn camera_wall_update(
+        &mut self,
+        profile: &stucco_core::RangeProfile,
+        wall: usize,
+        pose: &ProfilePose,
+        est: &Estimate,
+    ) {
+        // Walls the laser sees are left to it: the camera only stands in
+        // for it where furniture hides a wall from the laser's plane.
+        if self.walls_seen[wall] >= LASER_SEES_WALL {
+            return;
+        }
+        let top = est.height_m - CAMERA_WALL_BAND_M[1];
+        let mut across: Vec<f64> = profile
+            .elevations_rad
+            .iter()
+            .zip(&profile.ranges_m)
+            .filter(|(_, r)| r.is_finite())
+            .filter_map(|(el, r)| {
+                let z = pose.height_m + r * el.sin();
+                (z >= CAMERA_WALL_BAND_M[0] && z <= top).then(|| r * el.cos() * pose.direction.x)
+            })
+            .collect();
+        if across.len() < CAMERA_WALL_RAYS {
+            return;
+        }
+        across.sort_by(f64::total_cmp);
+        let d = across[across.len() / 2];
+        // A face, not a window or furniture: the rays agree.
+        let spread = across[3 * across.len() / 4] - across[across.len() / 4];
+        if spread > 0.02 || (d - pose.distance_m).abs() > 0.3 {
+            return;
+        }
+        let Some(name) = WallName::from_index(wall) else {
+            return;
+        };
+        let toward = -WallGeometry::of(name, est.room_m).inward;
+        let gamma_r = stucco_core::wrap_angle(toward.y.atan2(toward.x) - est.pose.theta);
+        let m = self.mount;
+        let d_l = d - (m.x * gamma_r.cos() + m.y * gamma_r.sin());
+        let measured = Wall {
+            d_m: d_l,
+            gamma_rad: stucco_core::wrap_angle(gamma_r - m.theta),
+            covariance: nalgebra::Matrix2::new(CAMERA_WALL_SIGMA_M.powi(2), 0.0, 0.0, 1.0),
+            points: across.len(),
+            rms_residual_m: spread / 1.35,
+            ends: [Point2::origin(), Point2::origin()],
+        };
+        let update = self.ekf.scan(profile.stamp, &[measured], &[]);
+        for q in update.used {
+            self.camera_walls_seen[q] += 1;
         }
     }
 

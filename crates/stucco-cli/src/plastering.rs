@@ -165,12 +165,12 @@ pub(crate) fn score_run(
     RoomScore::of(scores, sim.sprayed_m3() * 1000.0)
 }
 
-/// The least time plastering can take: the plasterable area the plan
-/// reaches at the tool's area rate, plus the straight-line travel between
+/// The least time plastering can take: the least area any plan must spray
+/// for the plasterable area the plan reaches ([`stucco_plan::minimum_spray_m2`])
+/// at the tool's area rate, plus the straight-line travel between
 /// stations at the robot's top speed.
 pub fn time_lower_bound(plan: &Plan, start: &stucco_core::Pose2, top_speed_mps: f64) -> f64 {
-    let predicted = stucco_plan::predicted_score(plan);
-    let area: f64 = predicted.surfaces.iter().map(|s| s.plasterable_m2).sum();
+    let area = stucco_plan::minimum_spray_m2(plan);
     let mut at = start.position();
     let mut travel = 0.0;
     for s in &plan.stations {

@@ -557,23 +557,23 @@ fn run_once(
     let plan_written = std::cell::RefCell::new(String::new());
     let save = |exec: &Executive, nav: &Navigator| -> Result<()> {
         if let Some(dir) = out {
+            let progress = exec.progress();
             // The plan first, once: the checkpoint names it by digest.
-            if let Some(plan) = exec.plaster_plan() {
-                let digest = stucco_mission::plan_digest(plan);
-                if *plan_written.borrow() != digest {
-                    write_atomic(
-                        &dir.join(PLAN_FILE),
-                        serde_json::to_string(plan)?.as_bytes(),
-                    )?;
-                    *plan_written.borrow_mut() = digest;
-                }
+            if let (Some(plan), Some(p)) = (exec.plaster_plan(), &progress.plaster)
+                && *plan_written.borrow() != p.plan_digest
+            {
+                write_atomic(
+                    &dir.join(PLAN_FILE),
+                    serde_json::to_string(plan)?.as_bytes(),
+                )?;
+                *plan_written.borrow_mut() = p.plan_digest.clone();
             }
             let est = nav.mission_estimate();
             let cp = Checkpoint {
                 mission: mission.name.clone(),
                 digest: digest(text),
                 seed,
-                progress: exec.progress(),
+                progress,
                 map: RoomMap {
                     room_m: est.room_m,
                     room_sigma_m: est.room_sigma_m,

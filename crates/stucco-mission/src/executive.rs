@@ -17,6 +17,11 @@ use stucco_core::{
 };
 use stucco_plan::{OpeningKind, Plan, RoomModel, SprayTool, SurfaceId, WallOpening};
 
+/// Spraying time between checkpoints within a stroke, s.
+const CHECKPOINT_SPRAY_S: f64 = 1.0;
+/// Time the nozzle is given past its travel to be at a pass's first point,
+/// s (a few control periods).
+const NOZZLE_SETTLE_S: f64 = 0.1;
 /// Heading off a station the gantry's geometry takes without a second
 /// approach, rad (2°).
 const HEADING_SPARE_RAD: f64 = 0.035;
@@ -288,7 +293,7 @@ pub struct ExecutiveConfig {
 }
 
 /// The mission's progress as a checkpoint keeps it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Progress {
     /// The task names, in order (a checkpoint of another mission is
@@ -471,6 +476,7 @@ impl Executive {
                     PlasterProgress {
                         task: usize::MAX,
                         cursor: Cursor::default(),
+                        in_move_s: 0.0,
                         plan_digest: String::new(),
                     },
                     Some(plan),
@@ -501,7 +507,11 @@ impl Executive {
                 a.plaster.as_ref().map(|r| PlasterProgress {
                     task: a.index,
                     cursor: r.cursor,
-                    plan_digest: plan_digest(&r.plan),
+                    in_move_s: match r.phase {
+                        Phase::Spraying { in_move_s } => in_move_s,
+                        _ => r.resume_s,
+                    },
+                    plan_digest: r.digest.clone(),
                 })
             }),
         }
@@ -1024,6 +1034,7 @@ impl Executive {
             ceiling,
             speed_mps,
             survey,
+            survey_speed_mps,
             ..
         } = self.tasks[index].clone()
         {
@@ -1039,7 +1050,7 @@ impl Executive {
                     clearance,
                     &self.config.vehicle,
                     est,
-                    speed_mps,
+                    survey_speed_mps,
                 ));
                 run.phase = Phase::Surveying;
             } else {
@@ -1296,12 +1307,9 @@ impl Executive {
                     p.plan_digest
                 ));
             }
-            return Ok(PlasterRun {
-                plan,
-                cursor: p.cursor,
-                phase: Phase::Moving,
-                retries: 0,
-            });
+            let mut run = PlasterRun::new(plan, p.cursor);
+            run.resume_s = p.in_move_s.max(0.0);
+            return Ok(run);
         }
         let plan = plan_room(
             self.config.spray.as_ref(),
@@ -1310,12 +1318,7 @@ impl Executive {
             ceiling,
             est,
         )?;
-        Ok(PlasterRun {
-            plan,
-            cursor: Cursor::default(),
-            phase: Phase::Moving,
-            retries: 0,
-        })
+        Ok(PlasterRun::new(plan, Cursor::default()))
     }
 
     /// Steps a `plaster` task: the way to a station, settling there, the
@@ -1371,9 +1374,7 @@ impl Executive {
                         unreachable_m2: plan.unreachable.iter().map(|u| u.area_m2).sum(),
                     },
                 });
-                run.plan = plan;
-                run.cursor = Cursor::default();
-                run.phase = Phase::Moving;
+                run.replan(plan);
                 let way = station_way(&gains, clearance, run, 0, &est.pose, speed);
                 a.queue.extend(way);
                 self.tool = park;
@@ -1403,9 +1404,10 @@ impl Executive {
                 // or twice more onto it, along the lane.
                 let spare = run.plan.tool.position_tolerance_m;
                 if run.retries < 2 {
-                    if off.theta.abs() > HEADING_SPARE_RAD {
-                        // Turned: back off along the lane and come on
-                        // again, the line law taking out the heading.
+                    if off.theta.abs() > HEADING_SPARE_RAD || off.y.abs() > spare {
+                        // Turned or beside the station: back off along the
+                        // lane and come on again, the line law taking out
+                        // the heading and the offset.
                         run.retries += 1;
                         let back = base * Pose2::new(-REALIGN_M, 0.0, 0.0);
                         a.queue
@@ -1414,7 +1416,7 @@ impl Executive {
                         run.phase = Phase::Moving;
                         return TaskStep::Drive(DriveCommand::STOP);
                     }
-                    if off.x.abs() > spare || off.y.abs() > 2.0 * spare {
+                    if off.x.abs() > spare {
                         run.retries += 1;
                         a.queue.push_back(if off.x > 0.0 {
                             Behaviour::reverse_to(&gains, base, 0.1)
@@ -1452,7 +1454,7 @@ impl Executive {
                     let far = (0..3)
                         .map(|k| (first.nozzle_m[k] - self.tool.nozzle_m[k]).abs())
                         .fold(0.0, f64::max);
-                    far / run.plan.tool.axis_speed_mps + 0.2
+                    far / run.plan.tool.axis_speed_mps + NOZZLE_SETTLE_S
                 } else {
                     left_s - dt
                 };
@@ -1460,12 +1462,23 @@ impl Executive {
                 run.phase = if left_s > 0.0 {
                     Phase::Positioning { left_s }
                 } else {
-                    Phase::Spraying { in_move_s: 0.0 }
+                    let in_move_s = std::mem::take(&mut run.resume_s);
+                    Phase::Spraying { in_move_s }
                 };
                 TaskStep::Drive(DriveCommand::STOP)
             }
             Phase::Spraying { in_move_s } => {
                 let mut t = in_move_s + if spray_ok { dt } else { 0.0 };
+                // A checkpoint every second of spraying: a run killed
+                // mid-stroke takes it up within a second of where it
+                // stopped.
+                if spray_ok {
+                    run.unsaved_s += dt;
+                    if run.unsaved_s >= CHECKPOINT_SPRAY_S {
+                        run.unsaved_s = 0.0;
+                        self.stroke_done = true;
+                    }
+                }
                 loop {
                     let c = run.cursor;
                     let Some(pass) = run
@@ -1801,9 +1814,25 @@ fn lane_entry(clearance: f64, run: &PlasterRun, k: usize) -> Option<Pose2> {
     let dir = line.along.dot(&heading).signum();
     let at = line.along.dot(&(goal.position().coords - line.origin));
     let (lo, hi) = (clearance, line.length_m - clearance);
-    let entry_at = (at - dir * RUN_IN_M).clamp(lo.min(hi), hi.max(lo));
-    let e = line.point(entry_at, dist.max(clearance));
+    let mut entry_at = (at - dir * RUN_IN_M).clamp(lo.min(hi), hi.max(lo));
+    // The robot turns there: nothing may stand within its sweep. Come on
+    // nearer the station until nothing does.
+    let off = dist.max(clearance);
+    while !turn_clear(run, &line.point(entry_at, off), clearance) && (at - entry_at) * dir > 0.05 {
+        entry_at += dir * 0.05;
+    }
+    let e = line.point(entry_at, off);
     Some(Pose2::new(e.x, e.y, goal.theta))
+}
+
+/// True when nothing the plan knows on the floor stands within `radius`
+/// of `p`.
+fn turn_clear(run: &PlasterRun, p: &nalgebra::Vector2<f64>, radius: f64) -> bool {
+    run.plan.room.obstacles.iter().all(|o| {
+        let dx = (o.min_m[0] - p.x).max(p.x - o.max_m[0]).max(0.0);
+        let dy = (o.min_m[1] - p.y).max(p.y - o.max_m[1]).max(0.0);
+        dx.hypot(dy) >= radius
+    })
 }
 
 /// Out of the lane of station `k` (the robot at `from` on it) to where it
@@ -1824,8 +1853,17 @@ fn lane_exit(
     let dir = line.along.dot(&heading).signum();
     let at = line.along.dot(&(from.position().coords - line.origin));
     let (lo, hi) = (clearance, line.length_m - clearance);
-    let out_at = (at + dir * RUN_IN_M).clamp(lo.min(hi), hi.max(lo));
-    let o = line.point(out_at, dist.max(clearance));
+    let (lo, hi) = (lo.min(hi), hi.max(lo));
+    let want = (at + dir * RUN_IN_M).clamp(lo, hi);
+    // The robot will turn there: the nearest place along the lane where
+    // nothing stands within its sweep.
+    let off = dist.max(clearance);
+    let out_at = (0..200)
+        .flat_map(|k| [want + 0.05 * k as f64, want - 0.05 * k as f64])
+        .filter(|a| (lo..=hi).contains(a))
+        .find(|a| turn_clear(run, &line.point(*a, off), clearance))
+        .unwrap_or(want);
+    let o = line.point(out_at, off);
     vec![Behaviour::regulate(
         gains,
         Pose2::new(o.x, o.y, from.theta),

@@ -28,13 +28,16 @@ pub struct Cursor {
 }
 
 /// The progress of the `plaster` task under way, as a checkpoint keeps it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlasterProgress {
     /// The task's index among the mission's.
     pub task: usize,
     /// Every move before this one is done.
     pub cursor: Cursor,
+    /// How far into the cursor's move the nozzle got, s.
+    #[serde(default)]
+    pub in_move_s: f64,
     /// Digest of the plan carried out (the plan itself is kept beside the
     /// checkpoint): a resumed run must carry out the same one.
     pub plan_digest: String,
@@ -63,6 +66,33 @@ pub(crate) struct PlasterRun {
     pub phase: Phase,
     /// Times the robot tried again to stand on the current station.
     pub retries: usize,
+    /// The plan's digest (made once: the plan is large).
+    pub digest: String,
+    /// Where in the cursor's move to take up spraying, s (a run resumed
+    /// mid-stroke).
+    pub resume_s: f64,
+    /// Spraying time since the last checkpoint, s.
+    pub unsaved_s: f64,
+}
+
+impl PlasterRun {
+    /// A run of `plan` from `cursor`.
+    pub fn new(plan: Plan, cursor: Cursor) -> PlasterRun {
+        PlasterRun {
+            digest: plan_digest(&plan),
+            plan,
+            cursor,
+            phase: Phase::Moving,
+            retries: 0,
+            resume_s: 0.0,
+            unsaved_s: 0.0,
+        }
+    }
+
+    /// Puts `plan` in place of the one carried out, from its start.
+    pub fn replan(&mut self, plan: Plan) {
+        *self = PlasterRun::new(plan, Cursor::default());
+    }
 }
 
 impl PlasterRun {
@@ -148,9 +178,10 @@ impl PlasterRun {
         self.nozzle_for(pass.surface, m.at(in_move_s), &est.pose, m.spray)
     }
 
-    /// The nozzle's command at the start of the cursor's pass move.
+    /// The nozzle's command where the cursor's move is to start (its
+    /// beginning, or where a resumed run takes it up), spray off.
     pub fn first_point(&self, est: &Estimate) -> Option<ToolCommand> {
-        self.command(0.0, est).map(ToolCommand::off)
+        self.command(self.resume_s, est).map(ToolCommand::off)
     }
 
     /// The wall line of station `k`'s lane, with the distance from it the

@@ -57,6 +57,9 @@ fn yes() -> bool {
 fn settle() -> f64 {
     1.0
 }
+fn survey_loop_speed() -> f64 {
+    0.3
+}
 
 /// One task of a mission. Positions are in the room frame (see
 /// [`WallName`]); a position along a wall runs along its axis (y for the
@@ -184,10 +187,14 @@ pub enum TaskSpec {
         /// settle, s.
         #[serde(default = "settle")]
         settle_s: f64,
-        /// First drive along each wall at the standoff, the camera finding
-        /// its windows and doors, and plan on what it found.
+        /// First drive a loop round the room, the camera finding the
+        /// walls' windows and doors, and plan on what it found.
         #[serde(default = "yes")]
         survey: bool,
+        /// Speed of that loop, m/s (the camera's profiles fall this far
+        /// apart over a twentieth of a second).
+        #[serde(default = "survey_loop_speed")]
+        survey_speed_mps: f64,
     },
     /// Stops and waits for the operator's `continue`.
     WaitForOperator {
@@ -328,10 +335,14 @@ impl TaskSpec {
                 ceiling,
                 speed_mps,
                 settle_s,
+                survey_speed_mps,
                 ..
             } => {
                 if walls.is_empty() && !ceiling {
                     return Some(("walls", "nothing to plaster: no walls and no ceiling"));
+                }
+                if !speed(*survey_speed_mps) {
+                    return Some(("survey_speed_mps", SPEED));
                 }
                 if !speed(*speed_mps) {
                     return Some(("speed_mps", SPEED));

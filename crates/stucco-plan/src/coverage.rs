@@ -196,3 +196,92 @@ pub fn predicted_score(plan: &Plan) -> RoomScore {
         .collect();
     RoomScore::of(scores, plan.spray_s() * plan.tool.flow_m3ps() * 1000.0)
 }
+
+/// The least area any plan must spray to lay the coat on the plasterable
+/// area `plan` reaches, m²: that area, plus along each of its borders the
+/// band a footprint of σ must spray past a border to leave the coat's
+/// tolerance on it (a stroke ending `z₀σ` past the border, `Φ(z₀) = 1 −
+/// tolerance`, lays `σ(φ(z₀) + z₀Φ(z₀))` of coat per metre of border
+/// beyond it). At the tool's area rate, the spraying time no plan can
+/// beat.
+pub fn minimum_spray_m2(plan: &Plan) -> f64 {
+    let tool = &plan.tool;
+    let s = tool.footprint_sigma_m;
+    let z0 = inverse_normal_cdf(1.0 - tool.tolerance);
+    let phi = (-0.5 * z0 * z0).exp() / std::f64::consts::TAU.sqrt();
+    let band = s * (phi + z0 * stucco_core::normal_cdf(z0));
+    let mut total = 0.0;
+    for (surface, reach) in plan.surfaces.iter().zip(&plan.reach) {
+        let [nu, nv] = reach.cells;
+        let c = reach.cell_m;
+        let target = |i: i64, j: i64| {
+            i >= 0
+                && j >= 0
+                && (i as usize) < nu
+                && (j as usize) < nv
+                && reach.reached[j as usize * nu + i as usize]
+                && surface.plasterable([(i as f64 + 0.5) * c, (j as f64 + 0.5) * c], tool)
+        };
+        let (mut area, mut border) = (0.0, 0.0);
+        for j in 0..nv as i64 {
+            for i in 0..nu as i64 {
+                if !target(i, j) {
+                    continue;
+                }
+                area += c * c;
+                for (di, dj) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+                    if !target(i + di, j + dj) {
+                        border += c;
+                    }
+                }
+            }
+        }
+        total += area + border * band;
+    }
+    total
+}
+
+/// `x` with `Φ(x) = p`, by bisection.
+fn inverse_normal_cdf(p: f64) -> f64 {
+    let (mut lo, mut hi) = (-10.0, 10.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if stucco_core::normal_cdf(mid) < p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_inverse_of_the_normal_distribution() {
+        for x in [-2.0, -0.3, 0.0, 1.2816, 2.5] {
+            assert!((inverse_normal_cdf(stucco_core::normal_cdf(x)) - x).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_border_band_is_what_a_lone_stroke_end_lays_past_it() {
+        // Strokes ending z0 σ past a border (the coat at 90% on it): the
+        // plaster past the border, per metre, in coat-metres.
+        let (s, tol) = (0.04, 0.1);
+        let z0 = inverse_normal_cdf(1.0 - tol);
+        let band = {
+            let phi = (-0.5 * z0 * z0).exp() / std::f64::consts::TAU.sqrt();
+            s * (phi + z0 * stucco_core::normal_cdf(z0))
+        };
+        // Numerically: ∫₀^∞ Φ((z0 σ − x)/σ) dx.
+        let n = 200_000;
+        let dx = 1.0 / n as f64;
+        let numeric: f64 = (0..n)
+            .map(|k| stucco_core::normal_cdf((z0 * s - (k as f64 + 0.5) * dx) / s) * dx)
+            .sum();
+        assert!((band - numeric).abs() < 1e-6, "{band} {numeric}");
+    }
+}

@@ -37,7 +37,7 @@ mod planner;
 mod surface;
 mod tool;
 
-pub use coverage::{RoomScore, SurfaceScore, predict, predicted_score, score};
+pub use coverage::{RoomScore, SurfaceScore, minimum_spray_m2, predict, predicted_score, score};
 pub use planner::{Lane, Move, PLAN_CELL_M, Pass, Plan, ReachMask, Station, Unreachable, plan};
 pub use surface::{
     Obstacle, Opening, OpeningKind, Rect, RoomModel, Surface, SurfaceId, WallLine, WallOpening,

@@ -24,6 +24,12 @@ use crate::{PlanError, Rect, SprayTool};
 use serde::{Deserialize, Serialize};
 use stucco_core::{Aim, Pose2, VehicleSpec, WallName};
 
+/// Least length of a missed ceiling row a lane must take on to be worth
+/// its drive, m.
+const MIN_LANE_GAIN_M: f64 = 0.25;
+/// Most lanes down the middle of a room a plan tries.
+const MAX_MIDDLE_LANES: usize = 12;
+
 /// Side of the cells of reach masks and predicted thickness, m.
 pub const PLAN_CELL_M: f64 = 0.02;
 
@@ -291,11 +297,41 @@ pub fn plan(
         .iter()
         .flat_map(|(_, st)| st.iter().map(|s| planner.ceiling_reach(&s.base)))
         .collect();
+    // Lanes down the middle, each placed for the lowest row of the
+    // ceiling still missed somewhere a lane can reach; a row no lane
+    // reaches more of is given up (and reported unreachable).
+    let [a0, a1] = tool.planned_arm_m();
+    let mut given_up: Vec<f64> = Vec::new();
     let mut middle = 0;
-    for band in planner.uncovered_bands(&strokes, &reach_rects) {
-        for (lane, stations) in planner.middle_lanes(band, &mut middle) {
-            reach_rects.extend(stations.iter().map(|s| planner.ceiling_reach(&s.base)));
-            lanes.push((lane, stations));
+    while middle < MAX_MIDDLE_LANES {
+        let Some(row) = planner
+            .open_rows(&strokes.0, &reach_rects)
+            .into_iter()
+            .find(|r| !given_up.iter().any(|g| (g - r).abs() < 1e-9))
+        else {
+            break;
+        };
+        let missed = |rects: &[Rect]| planner.missed_m(row, rects);
+        let before = missed(&reach_rects);
+        let mut placed = false;
+        // The lane as low as covers the row at its arm's near end, then
+        // higher up, while it still covers the row.
+        let mut y = row - a0;
+        while y + a1 >= row - 1e-9 {
+            let stations = planner.middle_lane(y, middle, &strokes.0, &reach_rects);
+            let mut with: Vec<Rect> = reach_rects.clone();
+            with.extend(stations.iter().map(|s| planner.ceiling_reach(&s.base)));
+            if !stations.is_empty() && missed(&with) < before - MIN_LANE_GAIN_M {
+                reach_rects = with;
+                lanes.push((Lane::Middle(middle), stations));
+                middle += 1;
+                placed = true;
+                break;
+            }
+            y -= BASE_STEP_M * 5.0;
+        }
+        if !placed {
+            given_up.push(row);
         }
     }
     let ordered = order_lanes(lanes, start);
@@ -640,103 +676,115 @@ impl Planner<'_> {
         }
     }
 
-    /// The bands of y (lowest and highest stroke) that stations reaching
-    /// `rects` leave partly uncovered.
-    fn uncovered_bands(&self, strokes: &(Vec<f64>, f64), rects: &[Rect]) -> Vec<[f64; 2]> {
+    /// The x the ceiling row at `y` is missed along by the reach `rects`,
+    /// as intervals.
+    fn missed_spans(&self, y: f64, rects: &[Rect]) -> Vec<[f64; 2]> {
         let gap = self.tool.surface_gap_m;
-        let xs = self.room.size_m[0];
-        let open: Vec<f64> = strokes
-            .0
+        let mut open = vec![[gap, self.room.size_m[0] - gap]];
+        for q in rects
             .iter()
-            .copied()
-            .filter(|&y| {
-                let mut spans: Vec<[f64; 2]> = rects
-                    .iter()
-                    .filter(|r| y >= r.v_m[0] - 1e-9 && y <= r.v_m[1] + 1e-9)
-                    .map(|r| r.u_m)
-                    .collect();
-                spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
-                let mut x = gap;
-                for s in spans {
-                    if s[0] > x + 1e-6 {
-                        return true;
-                    }
-                    x = x.max(s[1]);
-                }
-                x < xs - gap - 1e-6
-            })
-            .collect();
-        let spacing = strokes.0.get(1).map_or(1.0, |b| b - strokes.0[0]);
-        let mut bands: Vec<[f64; 2]> = Vec::new();
-        for y in open {
-            match bands.last_mut() {
-                Some(b) if y - b[1] < 1.5 * spacing => b[1] = y,
-                _ => bands.push([y, y]),
-            }
+            .filter(|q| y >= q.v_m[0] - 1e-9 && y <= q.v_m[1] + 1e-9)
+        {
+            cut(&mut open, q.u_m);
         }
-        bands
+        open.retain(|o| o[1] - o[0] > 1e-3);
+        open
     }
 
-    /// Lanes heading east down the middle of the room whose arms reach
-    /// the band of y, each with its stations (east end first).
-    fn middle_lanes(&self, band: [f64; 2], next: &mut usize) -> Vec<(Lane, Vec<Station>)> {
+    /// Length of the ceiling row at `y` the reach `rects` miss, m.
+    fn missed_m(&self, y: f64, rects: &[Rect]) -> f64 {
+        self.missed_spans(y, rects)
+            .iter()
+            .map(|o| o[1] - o[0])
+            .sum()
+    }
+
+    /// The ceiling rows the reach `rects` miss somewhere, lowest first.
+    fn open_rows(&self, rows: &[f64], rects: &[Rect]) -> Vec<f64> {
+        rows.iter()
+            .copied()
+            .filter(|&y| !self.missed_spans(y, rects).is_empty())
+            .collect()
+    }
+
+    /// A lane heading east at `y` with its stations (east end first),
+    /// placed only where the rows its arm reaches are still missed.
+    fn middle_lane(&self, y: f64, index: usize, rows: &[f64], reached: &[Rect]) -> Vec<Station> {
         let tool = self.tool;
         let [a0, a1] = tool.planned_arm_m();
-        let reach = a1 - a0;
         let gap = tool.surface_gap_m;
         let xs = self.room.size_m[0];
-        let mut out = Vec::new();
-        let mut y_lo = band[0];
-        while y_lo <= band[1] + 1e-9 {
-            // Heading east, the arm reaches y + a0 .. y + a1.
-            let y = y_lo - a0;
-            let pose_at = |x: f64| Pose2::new(x, y, 0.0);
-            let n = ((xs + 2.0) / BASE_STEP_M).ceil() as i64;
-            let feasible: Vec<f64> = (0..=n)
-                .map(|k| -1.0 + k as f64 * BASE_STEP_M)
-                .filter(|&x| self.free(&pose_at(x)))
-                .collect();
-            let x = tool.planned_rail_m();
-            let mut stations = Vec::new();
-            let mut tf = xs - gap;
-            while tf > gap + 1e-6 {
-                // A station must reach tf and leave less to do.
-                let pick = feasible
-                    .iter()
-                    .filter(|&&t| t + x[1] >= tf - 1e-9 && t + x[0] < tf - 1e-6)
-                    .min_by(|a, b| a.total_cmp(b));
-                match pick {
-                    Some(&tb) => {
-                        stations.push(Station {
-                            lane: Lane::Middle(*next),
-                            base: pose_at(tb),
-                            passes: Vec::new(),
-                        });
-                        tf = tb + x[0];
-                    }
-                    None => tf -= BASE_STEP_M,
+        let pose_at = |x: f64| Pose2::new(x, y, 0.0);
+        let n = ((xs + 2.0) / BASE_STEP_M).ceil() as i64;
+        let feasible: Vec<f64> = (0..=n)
+            .map(|k| -1.0 + k as f64 * BASE_STEP_M)
+            .filter(|&x| self.free(&pose_at(x)))
+            .collect();
+        let x = tool.planned_rail_m();
+        let mine: Vec<f64> = rows
+            .iter()
+            .copied()
+            .filter(|&r| r >= y + a0 - 1e-9 && r <= y + a1 + 1e-9)
+            .collect();
+        let mut stations: Vec<Station> = Vec::new();
+        // The farthest x at or below `below` that a row of this lane still
+        // misses: where the next station must reach.
+        let missing = |below: f64, placed: &[Station]| -> Option<f64> {
+            let mut rects: Vec<Rect> = reached.to_vec();
+            rects.extend(placed.iter().map(|s| self.ceiling_reach(&s.base)));
+            mine.iter()
+                .filter_map(|&r| {
+                    self.missed_spans(r, &rects)
+                        .iter()
+                        .filter(|o| o[0] < below)
+                        .map(|o| o[1].min(below))
+                        .reduce(f64::max)
+                })
+                .reduce(f64::max)
+        };
+        let mut tf = missing(xs - gap, &stations).unwrap_or(gap);
+        while tf > gap + 1e-6 {
+            // A station must reach tf and leave less to do.
+            let pick = feasible
+                .iter()
+                .filter(|&&t| t + x[1] >= tf - 1e-9 && t + x[0] < tf - 1e-6)
+                .min_by(|a, b| a.total_cmp(b));
+            match pick {
+                Some(&tb) => {
+                    stations.push(Station {
+                        lane: Lane::Middle(index),
+                        base: pose_at(tb),
+                        passes: Vec::new(),
+                    });
+                    tf = missing(tb + x[0], &stations).unwrap_or(gap);
                 }
+                None => tf -= BASE_STEP_M,
             }
-            if !stations.is_empty() {
-                out.push((Lane::Middle(*next), stations));
-                *next += 1;
-            }
-            y_lo += reach;
         }
-        out
+        stations
     }
 
-    /// Shares every ceiling stroke among the stations that reach it, the
-    /// earliest first, and gives each its ceiling pass.
+    /// Shares every ceiling stroke among the stations that reach it and
+    /// gives each its ceiling pass.
     fn ceiling_passes(&self, stations: &mut [Station], strokes: &(Vec<f64>, f64)) {
         let rects: Vec<Rect> = stations
             .iter()
             .map(|s| self.ceiling_reach(&s.base))
             .collect();
         let mut lines: Vec<Vec<Line>> = vec![Vec::new(); stations.len()];
+        // The walls' stations take their share first, whatever the order of
+        // the visit: their part of a row then ends where the reach of the
+        // wall's own stations ends, and the lanes in the middle take the
+        // rest.
+        let is_wall = |k: &usize| matches!(stations[*k].lane, Lane::Wall(_));
+        let order: Vec<usize> = (0..stations.len())
+            .filter(is_wall)
+            .chain((0..stations.len()).filter(|k| !is_wall(k)))
+            .collect();
         for &y in &strokes.0 {
             let mut taken: Vec<[f64; 2]> = Vec::new();
-            for (k, r) in rects.iter().enumerate() {
+            for &k in &order {
+                let r = &rects[k];
                 if y < r.v_m[0] - 1e-9 || y > r.v_m[1] + 1e-9 {
                     continue;
                 }

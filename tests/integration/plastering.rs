@@ -1,0 +1,103 @@
+//! Plastering the apartment's living room in the simulator
+//! (`missions/plaster-living.toml`): mapped, surveyed, planned on what the
+//! robot found, sprayed, and scored on the true walls and ceiling against
+//! ACCEPTANCE.md; and the same job killed halfway and resumed from its
+//! checkpoint, spraying nothing twice.
+
+use std::path::{Path, PathBuf};
+use stucco_cli::{MissionReport, TaskMissionJob, run_task_mission};
+
+fn mission() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/plaster-living.toml")
+}
+
+fn run(out: &Path, resume: bool, stop_after_s: Option<f64>) -> MissionReport {
+    let s = run_task_mission(
+        &TaskMissionJob {
+            mission: mission(),
+            seed: None,
+            runs: None,
+            out: Some(out.to_owned()),
+            resume,
+            stop_after_s,
+            record: false,
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    s.runs.into_iter().next().unwrap()
+}
+
+/// The scores of ACCEPTANCE.md's plastering table.
+fn assert_targets(r: &MissionReport) {
+    let pct = |x: Option<f64>| x.unwrap();
+    assert!(
+        pct(r.wall_coverage_pct) >= 99.5,
+        "walls {:?}",
+        r.wall_coverage_pct
+    );
+    assert!(
+        pct(r.ceiling_coverage_pct) >= 99.0,
+        "ceiling {:?}",
+        r.ceiling_coverage_pct
+    );
+    assert!(
+        pct(r.overspray_pct) <= 0.5,
+        "overspray {:?}",
+        r.overspray_pct
+    );
+    assert!(pct(r.thickness_cv) <= 0.08, "CV {:?}", r.thickness_cv);
+    assert!(
+        pct(r.double_sprayed_pct) <= 1.0,
+        "twice {:?}",
+        r.double_sprayed_pct
+    );
+    assert_eq!(r.windows_found, r.windows_total);
+    assert!(r.windows_total >= 1);
+    let edge = r.window_edge_err_max_m.unwrap();
+    assert!(edge <= 0.02, "window edges {edge}");
+    // What the sofa hides is reported, never silently dropped.
+    let plaster = r.plaster.as_ref().unwrap();
+    assert!(plaster.unreachable_m2 > 5.0, "{}", plaster.unreachable_m2);
+}
+
+#[test]
+fn the_living_room_is_plastered_within_the_targets() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(dir.path(), false, None);
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    assert_targets(&r);
+    let (t, bound) = (
+        r.mission_time_s.unwrap(),
+        r.mission_time_lower_bound_s.unwrap(),
+    );
+    assert!(t <= 1.25 * bound, "{t} s against a bound of {bound} s");
+    for name in [
+        "coat-south.svg",
+        "coat-ceiling.svg",
+        "plan.json",
+        "world.json",
+    ] {
+        assert!(dir.path().join(name).exists(), "{name}");
+    }
+}
+
+#[test]
+fn a_plastering_run_killed_and_resumed_sprays_nothing_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    // Killed while spraying the second wall.
+    let first = run(dir.path(), false, Some(1200.0));
+    assert_eq!(first.outcome, "stopped");
+    let cp: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("checkpoint.json")).unwrap())
+            .unwrap();
+    let station = cp["progress"]["plaster"]["cursor"]["station"]
+        .as_u64()
+        .unwrap();
+    assert!(station > 0, "{cp}");
+    let resumed = run(dir.path(), true, None);
+    assert_eq!(resumed.outcome, "done", "{:?}", resumed.reason);
+    assert_eq!(resumed.first_task, 1);
+    // The whole job's coat: the first run's plaster stayed on the walls.
+    assert_targets(&resumed);
+}
