@@ -1,4 +1,4 @@
-//! Task missions through `stucco run`: the demo carried out end to end and
+//! Task missions through `stucco run`: the living room's survey carried out end to end and
 //! scored against the truth, the files a run writes, a run stopped and
 //! resumed from its checkpoint, bad checkpoints and bad tasks refused.
 
@@ -50,13 +50,13 @@ fn events(dir: &Path) -> Vec<serde_json::Value> {
         .collect()
 }
 
-/// The demo maps the living room (the walls it can see, the room's size,
+/// The survey maps the living room (the walls it can see, the room's size,
 /// the door), makes a pass along the south wall finding its window with
 /// the range camera, and leaves through the door it found.
 #[test]
-fn the_demo_maps_the_room_and_leaves_through_the_door_it_found() {
+fn the_survey_maps_the_room_and_leaves_through_the_door_it_found() {
     let dir = tempfile::tempdir().unwrap();
-    let s = run(&mission("demo"), Some(dir.path()), false, None).unwrap();
+    let s = run(&mission("survey"), Some(dir.path()), false, None).unwrap();
     let r = &s.runs[0];
     assert_eq!(r.outcome, "done", "{:?}", r.reason);
     assert!(r.tasks.iter().all(|t| t.seconds.is_some()));
@@ -109,18 +109,18 @@ fn the_demo_maps_the_room_and_leaves_through_the_door_it_found() {
 #[test]
 fn the_same_seed_gives_the_same_events() {
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    run(&mission("demo"), Some(a.path()), false, Some(35.0)).unwrap();
-    run(&mission("demo"), Some(b.path()), false, Some(35.0)).unwrap();
+    run(&mission("survey"), Some(a.path()), false, Some(35.0)).unwrap();
+    run(&mission("survey"), Some(b.path()), false, Some(35.0)).unwrap();
     let read = |d: &Path| std::fs::read(d.join("events.jsonl")).unwrap();
     assert_eq!(read(a.path()), read(b.path()));
 }
 
 /// Switched off during its third task and started again with `--resume`,
-/// the demo finishes without doing the first two again.
+/// the survey finishes without doing the first two again.
 #[test]
 fn a_stopped_run_resumes_where_it_stopped() {
     let dir = tempfile::tempdir().unwrap();
-    let first = run(&mission("demo"), Some(dir.path()), false, Some(40.0)).unwrap();
+    let first = run(&mission("survey"), Some(dir.path()), false, Some(40.0)).unwrap();
     assert_eq!(first.outcome, "stopped");
     let cp: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("checkpoint.json")).unwrap())
@@ -133,7 +133,7 @@ fn a_stopped_run_resumes_where_it_stopped() {
         .collect();
     assert_eq!(states, ["done", "done", "active", "pending"]);
     let before = events(dir.path()).len();
-    let second = run(&mission("demo"), Some(dir.path()), true, None).unwrap();
+    let second = run(&mission("survey"), Some(dir.path()), true, None).unwrap();
     assert_eq!(second.outcome, "done", "{:?}", second.reason);
     assert_eq!(second.runs[0].first_task, 2);
     // The unfinished task started again, then the next; the finished ones
@@ -153,7 +153,7 @@ fn a_bad_checkpoint_is_refused_and_kept() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("checkpoint.json");
     std::fs::write(&path, "{\"mission\": \"demo").unwrap();
-    let err = run(&mission("demo"), Some(dir.path()), true, None).unwrap_err();
+    let err = run(&mission("survey"), Some(dir.path()), true, None).unwrap_err();
     assert!(err.downcast_ref::<BadInput>().is_some(), "{err:#}");
     assert!(format!("{err:#}").contains("corrupt"), "{err:#}");
     assert_eq!(
@@ -161,11 +161,11 @@ fn a_bad_checkpoint_is_refused_and_kept() {
         "{\"mission\": \"demo"
     );
     // A checkpoint written by another version of the mission file.
-    run(&mission("demo"), Some(dir.path()), false, Some(5.0)).unwrap();
+    run(&mission("survey"), Some(dir.path()), false, Some(5.0)).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     let other = text.replace("fnv1a64:", "fnv1a64:0");
     std::fs::write(&path, &other).unwrap();
-    let err = run(&mission("demo"), Some(dir.path()), true, None).unwrap_err();
+    let err = run(&mission("survey"), Some(dir.path()), true, None).unwrap_err();
     assert!(format!("{err:#}").contains("not this file"), "{err:#}");
     assert_eq!(std::fs::read_to_string(&path).unwrap(), other);
 }
@@ -222,12 +222,19 @@ fn a_wall_pass_holds_its_standoff() {
 #[test]
 fn a_recorded_run_replays_to_the_same_commands() {
     let dir = tempfile::tempdir().unwrap();
-    job(&mission("demo"), Some(dir.path()), false, Some(36.0), true).unwrap();
+    job(
+        &mission("survey"),
+        Some(dir.path()),
+        false,
+        Some(36.0),
+        true,
+    )
+    .unwrap();
     let r = stucco_cli::replay_run(&dir.path().join("run.mcap")).unwrap();
-    assert_eq!(r.mission, "demo: living room");
+    assert_eq!(r.mission, "survey: living room");
     assert!(r.ticks > 1500, "{r:?}");
     assert_eq!(r.identical, r.ticks, "{r:?}");
-    job(&mission("demo"), Some(dir.path()), true, None, true).unwrap();
+    job(&mission("survey"), Some(dir.path()), true, None, true).unwrap();
     let r = stucco_cli::replay_run(&dir.path().join("run.mcap")).unwrap();
     assert!(r.ticks > 100, "{r:?}");
     assert_eq!(r.identical, r.ticks, "{r:?}");

@@ -1,5 +1,5 @@
-//! Plastering the apartment's living room in the simulator
-//! (`missions/plaster-living.toml`): mapped, surveyed, planned on what the
+//! The demo: plastering the apartment's living room in the simulator
+//! (`missions/demo.toml`): mapped, surveyed, planned on what the
 //! robot found, sprayed, and scored on the true walls and ceiling against
 //! ACCEPTANCE.md; and the same job killed halfway and resumed from its
 //! checkpoint, spraying nothing twice.
@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use stucco_cli::{MissionReport, TaskMissionJob, run_task_mission};
 
 fn mission() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/plaster-living.toml")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/demo.toml")
 }
 
 fn run(out: &Path, resume: bool, stop_after_s: Option<f64>) -> MissionReport {
@@ -97,7 +97,7 @@ fn a_plastering_run_killed_and_resumed_sprays_nothing_twice() {
     assert!(station > 0, "{cp}");
     let resumed = run(dir.path(), true, None);
     assert_eq!(resumed.outcome, "done", "{:?}", resumed.reason);
-    assert_eq!(resumed.first_task, 1);
+    assert_eq!(resumed.first_task, 2);
     // The whole job's coat: the first run's plaster stayed on the walls.
     assert_targets(&resumed);
 }

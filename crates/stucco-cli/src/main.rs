@@ -537,6 +537,27 @@ fn print_run(r: &MissionReport) {
             d.error_m * 1e2
         );
     }
+    if let Some(p) = &r.plaster {
+        let pct = |x: Option<f64>| x.unwrap_or(0.0);
+        println!(
+            "  plastered from {} stations: walls {:.2}%, ceiling {:.2}% within the coat's tolerance; \
+             CV {:.2}%, over-thick {:.2}%, {:.1} L sprayed, {:.2}% into openings",
+            p.stations,
+            pct(r.wall_coverage_pct),
+            pct(r.ceiling_coverage_pct),
+            100.0 * pct(r.thickness_cv),
+            pct(r.double_sprayed_pct),
+            p.sprayed_l,
+            pct(r.overspray_pct)
+        );
+        println!(
+            "  unreachable (reported, not plastered): {:.2} m²; plastering took {:.0} s against a \
+             lower bound of {:.0} s",
+            p.unreachable_m2,
+            pct(r.mission_time_s),
+            pct(r.mission_time_lower_bound_s)
+        );
+    }
 }
 
 fn status_name(s: &stucco_mission::TaskStatus) -> String {

@@ -66,6 +66,13 @@ const FLOOR_CELL_M: f64 = 0.05;
 const FLOOR_MAX_SIGMA_M: f64 = 0.02;
 /// Echoes a cell needs to count as something standing there.
 const FLOOR_HITS: u32 = 20;
+/// Pieces of furniture nearer each other than this stand as one, m.
+const FURNITURE_GAP_M: f64 = 0.9;
+/// Thin pieces (legs, rows of legs) this near each other are one table,
+/// m.
+const TABLE_SPAN_M: f64 = 1.7;
+/// What is thinner than this is a leg or a row of legs, m.
+const LEG_M: f64 = 0.3;
 /// Height assumed for what stands on the floor (the laser sees its
 /// footprint, not its top), m.
 pub const OBSTACLE_HEIGHT_M: f64 = 1.0;
@@ -242,6 +249,35 @@ impl Navigator {
                 max_m: max,
                 height_m: OBSTACLE_HEIGHT_M,
             });
+        }
+        // Pieces nearer each other than the robot is wide (a table's legs,
+        // chairs round it) stand as one: the robot cannot pass between
+        // them, and what stands on them (a table's top) is above the
+        // laser's plane.
+        loop {
+            let pair = (0..out.len())
+                .flat_map(|i| (i + 1..out.len()).map(move |j| (i, j)))
+                .find(|&(i, j)| {
+                    let (a, b) = (&out[i], &out[j]);
+                    let dx = (a.min_m[0] - b.max_m[0])
+                        .max(b.min_m[0] - a.max_m[0])
+                        .max(0.0);
+                    let dy = (a.min_m[1] - b.max_m[1])
+                        .max(b.min_m[1] - a.max_m[1])
+                        .max(0.0);
+                    let thin = |o: &Obstacle| {
+                        (o.max_m[0] - o.min_m[0]).min(o.max_m[1] - o.min_m[1]) < LEG_M
+                    };
+                    let gap = dx.hypot(dy);
+                    gap < FURNITURE_GAP_M || (thin(a) && thin(b) && gap < TABLE_SPAN_M)
+                });
+            let Some((i, j)) = pair else {
+                break;
+            };
+            let b = out.swap_remove(j);
+            let a = &mut out[i];
+            a.min_m = [a.min_m[0].min(b.min_m[0]), a.min_m[1].min(b.min_m[1])];
+            a.max_m = [a.max_m[0].max(b.max_m[0]), a.max_m[1].max(b.max_m[1])];
         }
         out
     }
