@@ -1813,14 +1813,23 @@ fn lane_entry(clearance: f64, run: &PlasterRun, k: usize) -> Option<Pose2> {
     let heading = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
     let dir = line.along.dot(&heading).signum();
     let at = line.along.dot(&(goal.position().coords - line.origin));
-    let (lo, hi) = (clearance, line.length_m - clearance);
-    let mut entry_at = (at - dir * RUN_IN_M).clamp(lo.min(hi), hi.max(lo));
-    // The robot turns there: nothing may stand within its sweep. Come on
-    // nearer the station until nothing does.
+    let (lo, hi) = (
+        clearance.min(line.length_m - clearance),
+        (line.length_m - clearance).max(clearance),
+    );
+    let want = (at - dir * RUN_IN_M).clamp(lo, hi);
+    // The robot turns there: nothing may stand within its sweep. The
+    // nearest such place along the lane, one with a full run-in first.
     let off = dist.max(clearance);
-    while !turn_clear(run, &line.point(entry_at, off), clearance) && (at - entry_at) * dir > 0.05 {
-        entry_at += dir * 0.05;
-    }
+    let clear = |a: f64| turn_clear(run, &line.point(a, off), clearance);
+    let candidates = (0..200)
+        .flat_map(|k| [want - dir * 0.05 * k as f64, want + dir * 0.05 * k as f64])
+        .filter(|a| (lo..=hi).contains(a) && (at - a) * dir > 0.05);
+    let entry_at = candidates
+        .clone()
+        .find(|&a| (at - a) * dir >= MIN_RUN_IN_M && clear(a))
+        .or_else(|| candidates.clone().find(|&a| clear(a)))
+        .unwrap_or(want);
     let e = line.point(entry_at, off);
     Some(Pose2::new(e.x, e.y, goal.theta))
 }

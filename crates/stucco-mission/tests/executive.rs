@@ -876,3 +876,137 @@ fn a_lost_link_stops_a_jog_and_pauses_by_default() {
         }
     }
 }
+
+fn plaster(survey: bool) -> TaskSpec {
+    TaskSpec::Plaster {
+        walls: WallName::ALL.to_vec(),
+        ceiling: true,
+        speed_mps: 0.5,
+        settle_s: 0.5,
+        survey,
+        survey_speed_mps: 0.3,
+    }
+}
+
+#[test]
+fn a_plaster_task_without_a_spray_tool_fails_saying_so() {
+    let mut exec = executive(vec![plaster(false)], true);
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let events = run(&mut exec, &mut robot, 1.0, |_, _| Vec::new());
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?} {events:?}", exec.mode());
+    };
+    assert!(reason.contains("[spray]"), "{reason}");
+}
+
+/// On the kinematic robot with a perfect estimate, a 5 × 3 m room: every
+/// pass of the plan is sprayed, the nozzle only ever within the gantry's
+/// travel and spraying only while standing, a checkpoint due at least
+/// every stroke; and a run stopped halfway and resumed from its progress
+/// and plan takes the stroke up where it stopped.
+#[test]
+fn a_plaster_task_sprays_every_pass_and_resumes_mid_stroke() {
+    let tool = stucco_plan::SprayTool::default();
+    let make = || {
+        Executive::new(
+            ExecutiveConfig {
+                vehicle: VehicleSpec::default(),
+                gains: GainSchedule::default(),
+                safety: SafetyConfig::default(),
+                unattended: true,
+                spray: Some(tool.clone()),
+            },
+            vec![plaster(false)],
+        )
+    };
+    let mut exec = make();
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let (mut spraying_s, mut checkpoints, mut passes) = (0.0, 0, 0);
+    let mut halfway = None;
+    for _ in 0..(4000.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        let n = out.tool.nozzle_m;
+        assert!(
+            n[0] >= tool.rail_m[0] - 1e-9 && n[0] <= tool.rail_m[1] + 1e-9,
+            "{n:?}"
+        );
+        assert!(
+            n[1] >= tool.arm_m[0] - 1e-9 && n[1] <= tool.arm_m[1] + 1e-9,
+            "{n:?}"
+        );
+        if out.tool.spray {
+            assert_eq!(out.drive.speed_mps, 0.0, "sprays while driving");
+            spraying_s += DT;
+        }
+        checkpoints += usize::from(out.checkpoint_due);
+        passes += out
+            .events
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::PassDone { .. }))
+            .count();
+        if halfway.is_none() && spraying_s > 600.0 && out.tool.spray {
+            halfway = Some((
+                exec.progress(),
+                exec.plaster_plan().cloned().unwrap(),
+                robot.pose,
+            ));
+        }
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(*exec.mode(), MissionMode::Done);
+    let (progress, plan, pose) = halfway.unwrap();
+    let planned: usize = plan.stations.iter().map(|s| s.passes.len()).sum();
+    assert_eq!(passes, planned);
+    let spray_s = plan.spray_s();
+    assert!(
+        (spraying_s - spray_s).abs() < 0.01 * spray_s,
+        "{spraying_s} {spray_s}"
+    );
+    assert!(checkpoints as f64 >= spray_s, "{checkpoints} checkpoints");
+    // Resumed: the same plan from the same stroke, a second at most before
+    // where it stopped.
+    let p = progress.plaster.clone().unwrap();
+    assert!(p.in_move_s > 0.0, "{p:?}");
+    let mut again = make();
+    again.resume_plan(plan.clone());
+    again.resume_from(&progress).unwrap();
+    let mut robot = Robot::at(pose);
+    let mut resumed_s = 0.0;
+    for _ in 0..(4000.0 / DT) as usize {
+        let out = ask(&mut again, &robot, Seen::default());
+        if out.tool.spray {
+            resumed_s += DT;
+        }
+        robot.drive(out.drive);
+        if again.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(*again.mode(), MissionMode::Done);
+    // What was left, within a second of what the first run had still to
+    // spray when it was stopped.
+    assert!(
+        resumed_s < spray_s - 600.0 + 1.5,
+        "{resumed_s} of {spray_s}"
+    );
+    assert!(
+        resumed_s > spray_s - 600.0 - 1.5,
+        "{resumed_s} of {spray_s}"
+    );
+    // A plan that is not the one the checkpoint names is refused.
+    let mut wrong = make();
+    let mut other = plan;
+    other.stations.pop();
+    wrong.resume_plan(other);
+    wrong.resume_from(&progress).unwrap();
+    let mut robot = Robot::at(pose);
+    run(&mut wrong, &mut robot, 1.0, |_, _| Vec::new());
+    assert!(
+        matches!(wrong.mode(), MissionMode::Failed { reason } if reason.contains("not the one")),
+        "{:?}",
+        wrong.mode()
+    );
+}
