@@ -101,3 +101,36 @@ fn a_plastering_run_killed_and_resumed_sprays_nothing_twice() {
     // The whole job's coat: the first run's plaster stayed on the walls.
     assert_targets(&resumed);
 }
+
+/// A `[spray]` table the tool cannot lay its coat with, or a `plaster`
+/// task without one, is refused at load with the file, the line and the
+/// key.
+#[test]
+fn a_bad_spray_table_names_file_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.toml");
+    let head = "name = \"x\"\nworld = \"w.toml\"\nseed = 1\n\n[start]\nroom_m = [5.0, 3.0]\nroom_sigma_m = 0.1\n\n";
+    let task = "[[task]]\ntask = \"plaster\"\n";
+    std::fs::write(
+        &path,
+        format!("{head}[spray]\nthickness_mm = 10.0\nflow_l_per_min = 40.0\n\n{task}"),
+    )
+    .unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:11") && err.contains("flow_l_per_min"),
+        "{err}"
+    );
+    std::fs::write(&path, format!("{head}[spray]\nnozzle = 1\n\n{task}")).unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:10") && err.contains("nozzle"),
+        "{err}"
+    );
+    std::fs::write(&path, format!("{head}{task}")).unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:10") && err.contains("[spray]"),
+        "{err}"
+    );
+}

@@ -226,7 +226,25 @@ impl Mission {
                 line_of(&text, table, key)
             );
         }
+        if let Some(tool) = &mission.spray
+            && let Err(stucco_plan::PlanError::Tool { field, why }) =
+                tool.validate(SimConfig::default().vehicle.width_m)
+        {
+            bad!(
+                "{}:{}: [spray] {field}: {why}",
+                path.display(),
+                line_of(&text, "spray", field)
+            );
+        }
         for (i, task) in mission.tasks.iter().enumerate() {
+            if matches!(task, TaskSpec::Plaster { .. }) && mission.spray.is_none() {
+                bad!(
+                    "{}:{}: task {} (plaster): the mission has no [spray] table (the tool and the coat)",
+                    path.display(),
+                    line_of_task(&text, i, "task"),
+                    i + 1
+                );
+            }
             if let Some((key, why)) = task.invalid() {
                 bad!(
                     "{}:{}: task {} ({}): {key}: {why}",
