@@ -82,20 +82,15 @@ pub struct WallGeometry {
 }
 
 impl WallGeometry {
-    /// The wall `w` of a room `room_m` in size.
+    /// The wall `w` of a room `room_m` in size (the planner's frame of it:
+    /// one definition of the room's walls).
     pub fn of(w: WallName, room_m: [f64; 2]) -> Self {
-        let [xs, ys] = room_m;
-        let (origin, along, inward, length_m) = match w {
-            WallName::West => ((0.0, 0.0), (0.0, 1.0), (1.0, 0.0), ys),
-            WallName::South => ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), xs),
-            WallName::East => ((xs, 0.0), (0.0, 1.0), (-1.0, 0.0), ys),
-            WallName::North => ((0.0, ys), (1.0, 0.0), (0.0, -1.0), xs),
-        };
+        let line = stucco_plan::WallLine::of(w, room_m);
         WallGeometry {
-            origin: Vector2::new(origin.0, origin.1),
-            along: Vector2::new(along.0, along.1),
-            inward: Vector2::new(inward.0, inward.1),
-            length_m,
+            origin: line.origin,
+            along: line.along,
+            inward: line.inward,
+            length_m: line.length_m,
         }
     }
 
