@@ -18,6 +18,10 @@
 //!   as a [`Displacement`] with covariance since the last scan.
 //! - [`RoomEkf`]: the robot's pose and the room's size in an EKF fed by the
 //!   encoders and by walls, each scan applied at its own stamp.
+//! - [`WallMapEkf`]: a map of walls built while moving (paper B): the pose
+//!   and every wall in one EKF, each scan's walls matched by a
+//!   decision-directed Bayesian classifier; the [`WallMap`] saved and
+//!   loaded for localisation in a known map.
 //! - [`relative_pose_error`]: RPE (Kümmerle et al. 2009) of a trajectory.
 //! - [`WindowFinder`]: windows in the range camera's profiles.
 //! - [`synthetic`]: exact ray-cast scans of rooms with clutter, for tests.
@@ -40,11 +44,13 @@
 //! ```
 #![warn(missing_docs)]
 
+mod association;
 mod door;
 mod error;
 mod extractor;
 mod hough;
 mod line_fit;
+mod map_ekf;
 mod odometry;
 mod points;
 mod ransac;
@@ -55,6 +61,7 @@ mod rwht;
 mod segments;
 pub mod synthetic;
 mod wall;
+mod wall_map;
 mod windows;
 
 pub use door::{DoorConfig, DoorOpening, find_doors, find_doors_moving};
@@ -62,6 +69,7 @@ pub use error::NavError;
 pub use extractor::WallExtractor;
 pub use hough::{HoughConfig, HoughTransform, Weighting};
 pub use line_fit::FitConfig;
+pub use map_ekf::{MapUpdate, WallMapConfig, WallMapEkf};
 pub use odometry::{DeadReckoning, Displacement, OdometryConfig, sensor_twist, twist_at};
 pub use points::{ScanPoint, ScanPoints};
 pub use ransac::{RansacConfig, RansacExtractor};
@@ -74,4 +82,5 @@ pub use rpe::{Pairs, Rpe, relative_pose_error};
 pub use rwht::{RwhtConfig, RwhtExtractor};
 pub use segments::{Segment, SegmentTransform, Segmenter};
 pub use wall::Wall;
+pub use wall_map::{MapWall, WallId, WallMap, WallRole};
 pub use windows::{ProfilePose, Window, WindowConfig, WindowFinder};
