@@ -7,6 +7,7 @@ mod door_passage;
 mod link;
 mod missions;
 mod plastering;
+mod replay_real_logs;
 mod walls_on_real_logs;
 
 /// `stucco run` on `missions/<name>.toml`, with the mission's own seed and

@@ -17,9 +17,11 @@
 
 mod carmen;
 mod experiments;
+mod log_replay;
 mod mission;
 mod navigator;
 mod op;
+mod plan_view;
 mod plastering;
 mod record;
 mod robot;
@@ -29,6 +31,10 @@ mod walls;
 
 pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
+pub use log_replay::{
+    LogReplayJob, LogReplayReport, OdomNoise, OdometrySource, OdometryTrust, RPE_PAIR_DISTANCE_M,
+    Reference, run_log_replay,
+};
 pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
 pub use op::{BenchReport, CommandResult, EventFeed, Operator};

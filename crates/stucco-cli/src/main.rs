@@ -13,6 +13,7 @@ use stucco_cli::{
     TaskMissionJob, WallsJob, replay_run, run_mission, run_simbench, run_task_mission, run_walls,
 };
 use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
+use stucco_cli::{LogReplayJob, OdomNoise, OdometrySource, Reference, run_log_replay};
 use stucco_core::{Command as Tc, Reply, Side, WallName};
 use stucco_link::Mode;
 
@@ -144,6 +145,39 @@ enum Command {
         /// Join as a client of the router `--connect` names, not as a peer.
         #[arg(long, global = true)]
         client: bool,
+    },
+    /// Build a map of walls from a CARMEN log with the map-building EKF
+    /// (odometry and front-laser scans), write the trajectory and the map,
+    /// and with a reference print the relative pose error of the filter
+    /// and of the odometry.
+    Replay {
+        /// The log (`.log` or `.log.gz`).
+        log: PathBuf,
+        /// Compare with the robot poses of this log (matched by stamp).
+        #[arg(long, conflicts_with = "reference_from_log")]
+        reference: Option<PathBuf>,
+        /// Compare with the robot poses written in the log itself.
+        #[arg(long)]
+        reference_from_log: bool,
+        /// Where the odometry comes from: the laser lines' odometry pose or
+        /// the log's ODOM lines.
+        #[arg(long, value_enum, default_value = "scan")]
+        odometry: OdometrySource,
+        /// Make the odometry worse: `scale=0.02,drift_deg_per_m=1,
+        /// trans_sigma_m=0.01,rot_sigma_deg=0.5,seed=1` (any keys omitted
+        /// are 0).
+        #[arg(long)]
+        odom_noise: Option<OdomNoise>,
+        /// Write trajectory.csv, map.json and map.svg here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Pair each pose for the RPE with the first one this far along the
+        /// reference path, m.
+        #[arg(long, default_value_t = stucco_cli::RPE_PAIR_DISTANCE_M)]
+        rpe_distance: f64,
+        /// Print the report as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
     },
     /// Replay a run recorded with `stucco run --record` through the
     /// executive and check it gives the same command at every tick. Exit
@@ -739,6 +773,84 @@ fn main() -> ExitCode {
                     }
                 }
                 Err(e) => fail(&anyhow::Error::from(e)),
+            }
+        }
+        Command::Replay {
+            log,
+            reference,
+            reference_from_log,
+            odometry,
+            odom_noise,
+            out,
+            rpe_distance,
+            json,
+        } => {
+            let reference = match (reference, reference_from_log) {
+                (Some(path), _) => Reference::Log(path),
+                (None, true) => Reference::FromLog,
+                (None, false) => Reference::None,
+            };
+            let job = LogReplayJob {
+                log,
+                reference,
+                odometry,
+                odom_noise,
+                out,
+                rpe_distance_m: rpe_distance,
+            };
+            let bar = ProgressBar::new(0).with_style(
+                ProgressStyle::with_template("{bar:30} {pos}/{len} scans {per_sec} {msg}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            bar.set_message(job.log.display().to_string());
+            let result = run_log_replay(&job, |done, total| {
+                if done % 16 == 0 || done == total {
+                    bar.set_length(total as u64);
+                    bar.set_position(done as u64);
+                }
+            });
+            bar.finish_and_clear();
+            match result {
+                Ok(report) if json => print_json(&report),
+                Ok(report) => {
+                    println!(
+                        "{}: {} scans, {} walls in the map ({} of the building); {:.2} walls matched and {:.2} discarded as doubtful a scan; scan median {:.0} µs, p99 {:.0} µs",
+                        report.log,
+                        report.scans,
+                        report.map_walls,
+                        report.building_walls,
+                        report.matched_per_scan,
+                        report.doubtful_per_scan,
+                        report.median_scan_us,
+                        report.p99_scan_us
+                    );
+                    let show = |name: &str, r: &Option<stucco_nav::Rpe>| {
+                        if let Some(r) = r {
+                            println!(
+                                "  {name:<9} RPE over {} pairs {} m apart: {:.4} ± {:.4} m, {:.4} ± {:.4} rad",
+                                r.pairs,
+                                report.rpe_pair_distance_m,
+                                r.trans_mean_m,
+                                r.trans_std_m,
+                                r.rot_mean_rad,
+                                r.rot_std_rad
+                            );
+                        }
+                    };
+                    show("filter", &report.rpe);
+                    show("odometry", &report.odom_rpe);
+                    if let Some(dir) = &job.out {
+                        println!(
+                            "wrote {0}/trajectory.csv, {0}/map.json and {0}/map.svg",
+                            dir.display()
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(2)
+                }
             }
         }
         Command::ReplayRun { recording, json } => match replay_run(&recording) {

@@ -2,6 +2,7 @@
 //! walls placed in the world with the log's poses, and a consistency figure.
 
 use crate::carmen::{LoggedScan, open_carmen_file};
+use crate::plan_view::{PlanPath, draw_plan};
 use anyhow::{Context, Result};
 use nalgebra::{Point2, Vector2};
 use serde::Serialize;
@@ -70,7 +71,7 @@ pub struct WallsReport {
 pub const MIN_REOBSERVATIONS: usize = 5;
 
 /// Extraction tuned to the SICK scanners of the CARMEN logs (σ ≈ 1.5 cm).
-fn laser_for_logs() -> LaserSpec {
+pub(crate) fn laser_for_logs() -> LaserSpec {
     LaserSpec {
         range_sigma_m: 0.015,
         ..LaserSpec::sick_lms291()
@@ -326,7 +327,6 @@ fn draw_map(
     trajectory: &[Pose2],
     doors: &[Point2<f64>],
 ) -> Result<()> {
-    use plotters::prelude::*;
     let mut segments = Vec::new();
     for c in map
         .clusters
@@ -337,66 +337,18 @@ fn draw_map(
         let u = Vector2::new(-n.y, n.x);
         let a = n * c.d + u * c.lo;
         let b = n * c.d + u * c.hi;
-        segments.push(((a.x, a.y), (b.x, b.y), c.obs.len()));
+        segments.push(((a.x, a.y), (b.x, b.y), false));
     }
-    let xs = segments
-        .iter()
-        .flat_map(|s| [s.0.0, s.1.0])
-        .chain(trajectory.iter().map(|p| p.x));
-    let ys = segments
-        .iter()
-        .flat_map(|s| [s.0.1, s.1.1])
-        .chain(trajectory.iter().map(|p| p.y));
-    let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |m, x| {
-        (m.0.min(x), m.1.max(x))
-    });
-    let (y0, y1) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |m, y| {
-        (m.0.min(y), m.1.max(y))
-    });
-    let span = (x1 - x0).max(y1 - y0).max(1.0) + 2.0;
-    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-    let root = SVGBackend::new(path, (1000, 1000)).into_drawing_area();
-    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("drawing {}: {e}", path.display());
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "stucco walls: world walls, laser path (blue), doors (red)",
-            ("sans-serif", 18),
-        )
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(40)
-        .build_cartesian_2d(
-            cx - span / 2.0..cx + span / 2.0,
-            cy - span / 2.0..cy + span / 2.0,
-        )
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("x (m)")
-        .y_desc("y (m)")
-        .draw()
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(LineSeries::new(
-            trajectory.iter().map(|p| (p.x, p.y)),
-            BLUE.mix(0.4),
-        ))
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(
-            segments
-                .iter()
-                .map(|(a, b, _)| PathElement::new(vec![*a, *b], BLACK.stroke_width(2))),
-        )
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(
-            doors
-                .iter()
-                .map(|d| Circle::new((d.x, d.y), 2, RED.filled())),
-        )
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    let laser: Vec<(f64, f64)> = trajectory.iter().map(|p| (p.x, p.y)).collect();
+    let marks: Vec<(f64, f64)> = doors.iter().map(|d| (d.x, d.y)).collect();
+    draw_plan(
+        path,
+        "stucco walls: world walls, laser path (blue), doors (red)",
+        &segments,
+        &[PlanPath {
+            points: &laser,
+            color: plotters::style::BLUE,
+        }],
+        &marks,
+    )
 }

@@ -97,6 +97,20 @@ impl Classifier {
                 }
             })
             .collect();
+        // A wall of the map is one line of the scan: two observations
+        // decided for the same wall are both in doubt (the scan's pieces of
+        // one line were joined before).
+        let mut decisions = decisions;
+        for a in 0..decisions.len() {
+            for b in a + 1..decisions.len() {
+                if let (Decision::Match(ka), Decision::Match(kb)) = (decisions[a], decisions[b])
+                    && candidates[a][ka].state_row == candidates[b][kb].state_row
+                {
+                    decisions[a] = Decision::Doubtful;
+                    decisions[b] = Decision::Doubtful;
+                }
+            }
+        }
         let doubtful: Vec<usize> = (0..decisions.len())
             .filter(|&j| decisions[j] == Decision::Doubtful)
             .collect();
@@ -131,7 +145,14 @@ impl Classifier {
                     None => nones += 1,
                 }
             }
-            if let Some(ll) = joint_log_density(&set, noise, p) {
+            let exclusive = set.iter().enumerate().all(|(a, (_, pa))| {
+                set[a + 1..]
+                    .iter()
+                    .all(|(_, pb)| pa.state_row != pb.state_row)
+            });
+            if !exclusive {
+                // Not a hypothesis: one wall would be two lines of the scan.
+            } else if let Some(ll) = joint_log_density(&set, noise, p) {
                 hypotheses.push((choice.clone(), ll + nones as f64 * log_none));
             }
             // Next assignment (odometer order).

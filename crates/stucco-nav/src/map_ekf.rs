@@ -60,16 +60,17 @@ pub struct WallMapConfig {
     pub confirm_scans: u32,
     /// Scans a candidate may go unseen before it is forgotten.
     pub candidate_lifetime_scans: u64,
-    /// How close two sightings of a candidate must be: offset, m.
-    pub candidate_offset_m: f64,
-    /// How close two sightings of a candidate must be: angle, rad.
-    pub candidate_angle_rad: f64,
+    /// Walls closer than this in angle are parallel, rad.
+    pub parallel_rad: f64,
     /// Squared Mahalanobis distance under which two map walls whose
     /// stretches meet are one.
     pub merge_chi2: f64,
     /// Scans that must see a wall behind a face before it is marked
     /// [`WallRole::InFront`].
     pub in_front_scans: u32,
+    /// Shallowest a face may stand before a wall to be taken for something
+    /// in front of it, m.
+    pub in_front_min_depth_m: f64,
     /// Deepest a face may stand before a wall to be taken for something in
     /// front of it, m (the wall of the next room, seen through a door,
     /// stands further behind).
@@ -96,10 +97,10 @@ impl Default for WallMapConfig {
             new_wall_min_points: 15,
             confirm_scans: 3,
             candidate_lifetime_scans: 20,
-            candidate_offset_m: 0.1,
-            candidate_angle_rad: 3f64.to_radians(),
+            parallel_rad: 3f64.to_radians(),
             merge_chi2: 9.21,
             in_front_scans: 3,
+            in_front_min_depth_m: 0.05,
             in_front_depth_m: 1.0,
             in_front_overlap_m: 0.3,
             extend_map: true,
@@ -127,6 +128,9 @@ pub struct MapUpdate {
 struct Candidate {
     rho_m: f64,
     alpha_rad: f64,
+    /// Covariance of `(ρ, α)` at the last sighting, from the pose's then
+    /// and the observation's.
+    covariance: Matrix2<f64>,
     extent_m: [f64; 2],
     sightings: u32,
     last_scan: u64,
@@ -304,10 +308,14 @@ impl WallMapEkf {
 
     /// Applies the walls `seen` in one scan (in the laser's frame, taken at
     /// the pose the filter now holds).
-    pub fn scan(&mut self, seen: &[Wall]) -> MapUpdate {
+    pub fn scan(&mut self, walls: &[Wall]) -> MapUpdate {
         self.scans += 1;
         let mut update = MapUpdate::default();
         let (laser, dl) = self.laser();
+        // Pieces of one line (a wall broken by a door, by clutter before
+        // it) are one observation: their errors are one error.
+        let (seen, pieces) = self.join_pieces(walls);
+        let seen = &seen[..];
         let mut candidates = self.candidates_of(seen, &laser, &dl);
         // An observation that bridges two map walls of one line (a wall
         // first seen in two pieces) joins them before it is classified.
@@ -336,7 +344,7 @@ impl WallMapEkf {
             match d {
                 Decision::Match(k) => matched.push((j, candidates[j][*k].0)),
                 Decision::Unknown => unknown.push(j),
-                Decision::Doubtful => update.doubtful.push(j),
+                Decision::Doubtful => update.doubtful.extend(&pieces[j]),
             }
         }
         let set: Vec<(usize, &Pairing)> = matched
@@ -353,8 +361,10 @@ impl WallMapEkf {
             let [a, b] = seen[j].ends.map(|e| w.along(&laser.transform_point(&e)));
             w.extent_m = [w.extent_m[0].min(a.min(b)), w.extent_m[1].max(a.max(b))];
             w.observations += 1;
-            update.matched.push((j, w.id));
+            update.matched.extend(pieces[j].iter().map(|&k| (k, w.id)));
         }
+        update.matched.sort_unstable();
+        update.doubtful.sort_unstable();
         update.in_front = self.mark_in_front(&matched, &laser);
         if self.config.extend_map {
             for j in unknown {
@@ -374,6 +384,63 @@ impl WallMapEkf {
         let merged = self.merge_around(&touched);
         update.merged.extend(merged);
         update
+    }
+
+    /// The walls of one scan with the pieces of each line joined: each
+    /// joined wall and the indices of its pieces. Pieces are joined when
+    /// their lines agree within their noise; the joined line is their
+    /// points-weighted mean, with the covariance of the best-measured piece
+    /// (not less: their errors share the pose and the wall's own waviness).
+    fn join_pieces(&self, walls: &[Wall]) -> (Vec<Wall>, Vec<Vec<usize>>) {
+        let mut joined: Vec<Wall> = Vec::with_capacity(walls.len());
+        let mut pieces: Vec<Vec<usize>> = Vec::with_capacity(walls.len());
+        for (j, z) in walls.iter().enumerate() {
+            let r = self.noise(z);
+            let same = joined.iter().position(|w| {
+                let delta = Vector2::new(w.d_m - z.d_m, wrap_angle(w.gamma_rad - z.gamma_rad));
+                (self.noise(w) + r)
+                    .try_inverse()
+                    .is_some_and(|inv| delta.dot(&(inv * delta)) < self.config.merge_chi2)
+            });
+            match same {
+                None => {
+                    joined.push(z.clone());
+                    pieces.push(vec![j]);
+                }
+                Some(k) => {
+                    let w = &joined[k];
+                    let (nw, nz) = (w.points as f64, z.points as f64);
+                    let f = nz / (nw + nz);
+                    let gamma = wrap_angle(w.gamma_rad + f * wrap_angle(z.gamma_rad - w.gamma_rad));
+                    let dir = Vector2::new(-gamma.sin(), gamma.cos());
+                    let ts: Vec<f64> = w
+                        .ends
+                        .iter()
+                        .chain(&z.ends)
+                        .map(|e| dir.dot(&e.coords))
+                        .collect();
+                    let lo = ts.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = ts.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    let d = w.d_m + f * (z.d_m - w.d_m);
+                    let foot = Vector2::new(gamma.cos(), gamma.sin()) * d;
+                    let best = if z.points > w.points {
+                        z.covariance
+                    } else {
+                        w.covariance
+                    };
+                    joined[k] = Wall {
+                        d_m: d,
+                        gamma_rad: gamma,
+                        covariance: best,
+                        points: w.points + z.points,
+                        rms_residual_m: w.rms_residual_m.max(z.rms_residual_m),
+                        ends: [Point2::from(foot + dir * lo), Point2::from(foot + dir * hi)],
+                    };
+                    pieces[k].push(j);
+                }
+            }
+        }
+        (joined, pieces)
     }
 
     /// The pairings of each of `seen` with the map's walls.
@@ -480,9 +547,8 @@ impl WallMapEkf {
                 let behind = &self.walls[b];
                 let depth = behind.rho_m - front.rho_m;
                 b != f
-                    && wrap_angle(behind.alpha_rad - front.alpha_rad).abs()
-                        < cfg.candidate_angle_rad
-                    && depth > cfg.candidate_offset_m
+                    && wrap_angle(behind.alpha_rad - front.alpha_rad).abs() < cfg.parallel_rad
+                    && depth > cfg.in_front_min_depth_m
                     && depth < cfg.in_front_depth_m
                     && -front.gap_to(behind.extent_m[0], behind.extent_m[1])
                         > cfg.in_front_overlap_m
@@ -499,6 +565,28 @@ impl WallMapEkf {
         marked
     }
 
+    /// The line of observation `z` in the map, and its Jacobians by the
+    /// pose `(x, y, θ)` and by the observation `(d, γ)`.
+    fn line_jacobians(&self, z: &Wall) -> (Matrix2x3<f64>, Matrix2<f64>, f64, f64) {
+        let (laser, dl) = self.laser();
+        let alpha = wrap_angle(z.gamma_rad + laser.theta);
+        let (s, c) = alpha.sin_cos();
+        let rho = z.d_m + c * laser.x + s * laser.y;
+        let drho_dalpha = -s * laser.x + c * laser.y;
+        let g_pose = Matrix2x3::new(c, s, c * dl.x + s * dl.y + drho_dalpha, 0.0, 0.0, 1.0);
+        let g_obs = Matrix2::new(1.0, drho_dalpha, 0.0, 1.0);
+        (g_pose, g_obs, rho, alpha)
+    }
+
+    /// The line of observation `z` (noise `r`) in the map: `(ρ, α)` and
+    /// its covariance, from the pose's and the observation's.
+    fn line_in_map(&self, z: &Wall, r: &Matrix2<f64>) -> (f64, f64, Matrix2<f64>) {
+        let (g_pose, g_obs, rho, alpha) = self.line_jacobians(z);
+        let covariance = g_pose * self.p.fixed_view::<3, 3>(0, 0) * g_pose.transpose()
+            + g_obs * r * g_obs.transpose();
+        (rho, alpha, covariance)
+    }
+
     /// Tracks an observation no map wall is near; returns the new wall's id
     /// when it has been seen often enough to join the map.
     fn consider(&mut self, z: &Wall, r: &Matrix2<f64>) -> Option<WallId> {
@@ -507,18 +595,24 @@ impl WallMapEkf {
         {
             return None;
         }
-        let (laser, _) = self.laser();
-        let alpha = wrap_angle(z.gamma_rad + laser.theta);
+        let (rho, alpha, covariance) = self.line_in_map(z, r);
         let (s, c) = alpha.sin_cos();
-        let rho = z.d_m + c * laser.x + s * laser.y;
+        let (laser, _) = self.laser();
         let along = |p: &Point2<f64>| -s * p.x + c * p.y;
         let [a, b] = z.ends.map(|e| along(&laser.transform_point(&e)));
         let (lo, hi) = (a.min(b), a.max(b));
         let cfg = &self.config;
         let scans = self.scans;
+        // Sightings agree when their difference fits both uncertainties
+        // (the pose's at each sighting and the observations').
+        let agrees = |k: &Candidate| {
+            let delta = Vector2::new(k.rho_m - rho, wrap_angle(k.alpha_rad - alpha));
+            (k.covariance + covariance)
+                .try_inverse()
+                .is_some_and(|inv| delta.dot(&(inv * delta)) < cfg.gate_chi2)
+        };
         let found = self.candidates.iter().position(|k| {
-            wrap_angle(k.alpha_rad - alpha).abs() < cfg.candidate_angle_rad
-                && (k.rho_m - rho).abs() < cfg.candidate_offset_m
+            agrees(k)
                 && lo < k.extent_m[1] + cfg.max_gap_m
                 && hi > k.extent_m[0] - cfg.max_gap_m
                 && k.last_scan < scans
@@ -529,6 +623,7 @@ impl WallMapEkf {
                 self.candidates.push(Candidate {
                     rho_m: rho,
                     alpha_rad: alpha,
+                    covariance,
                     extent_m: [lo, hi],
                     sightings: 1,
                     last_scan: scans,
@@ -539,6 +634,7 @@ impl WallMapEkf {
         let c = &mut self.candidates[k];
         c.rho_m = rho;
         c.alpha_rad = alpha;
+        c.covariance = covariance;
         c.extent_m = [c.extent_m[0].min(lo), c.extent_m[1].max(hi)];
         c.sightings += 1;
         c.last_scan = scans;
@@ -552,22 +648,14 @@ impl WallMapEkf {
     /// Adds the wall observed as `z` (noise `r`) to the state, correlated
     /// with the pose it was seen from.
     fn augment(&mut self, z: &Wall, r: &Matrix2<f64>, extent_m: [f64; 2]) -> WallId {
-        let (laser, dl) = self.laser();
-        let alpha = wrap_angle(z.gamma_rad + laser.theta);
-        let (s, c) = alpha.sin_cos();
-        let rho = z.d_m + c * laser.x + s * laser.y;
-        let drho_dalpha = -s * laser.x + c * laser.y;
-        // ∂(ρ, α)/∂(x, y, θ) and ∂(ρ, α)/∂(d, γ).
-        let g_pose = Matrix2x3::new(c, s, c * dl.x + s * dl.y + drho_dalpha, 0.0, 0.0, 1.0);
-        let g_obs = Matrix2::new(1.0, drho_dalpha, 0.0, 1.0);
+        let (rho, alpha, own) = self.line_in_map(z, r);
+        let g_pose = self.line_jacobians(z).0;
         let n = self.x.len();
         let mut x = self.x.clone().resize_vertically(n + 2, 0.0);
         x[n] = rho;
         x[n + 1] = alpha;
         let mut p = self.p.clone().resize(n + 2, n + 2, 0.0);
         let cross = g_pose * self.p.rows(0, 3); // 2 × n
-        let own = g_pose * self.p.fixed_view::<3, 3>(0, 0) * g_pose.transpose()
-            + g_obs * r * g_obs.transpose();
         p.view_mut((n, 0), (2, n)).copy_from(&cross);
         p.view_mut((0, n), (n, 2)).copy_from(&cross.transpose());
         p.fixed_view_mut::<2, 2>(n, n).copy_from(&own);

@@ -457,31 +457,35 @@ fn glass_frames_and_the_room_behind_them_stay_apart() {
 
 #[test]
 fn a_wall_first_seen_in_two_pieces_becomes_one() {
-    // A screen in the room hides the middle of the north wall from the
-    // first leg; the second leg passes behind the screen and sees it whole.
-    let mut scene = room(8.0, 5.0);
-    scene.push(surface((2.5, 3.0), (5.5, 3.0), (0.0, 1.0)));
-    scene.push(surface((5.5, 3.02), (2.5, 3.02), (0.0, -1.0)));
-    let start = Pose2::new(4.0, 1.0, std::f64::consts::FRAC_PI_2);
-    let mut poses = vec![start; 6];
-    poses.extend(path(start, &[(6.8, 1.0), (6.8, 4.0), (1.5, 4.0)]));
+    // A screen in the room hides the middle of the north wall. The robot
+    // looks (90° laser) left of it, then right of it: two pieces of one
+    // line, 3.5 m apart. Then it walks behind the screen and sees the wall
+    // whole.
+    let mut scene = room(8.0, 8.0);
+    scene.push(surface((3.5, 3.0), (4.5, 3.0), (0.0, 1.0)));
+    scene.push(surface((4.5, 3.02), (3.5, 3.02), (0.0, -1.0)));
+    let laser = Laser {
+        fov_rad: 90f64.to_radians(),
+        ..Laser::default()
+    };
+    let left = Pose2::new(4.0, 1.0, 135f64.to_radians());
+    let right = Pose2::new(4.0, 1.0, 45f64.to_radians());
+    let mut poses = vec![left; 6];
+    poses.extend(vec![right; 6]);
+    poses.extend(path(
+        right,
+        &[(6.0, 1.0), (6.0, 3.5), (4.0, 3.5), (4.0, 3.6)],
+    ));
     let mut pieces = 0;
-    let run = drive(
-        &scene,
-        &poses,
-        &Laser::default(),
-        exact_start(&poses),
-        5,
-        |i, f, _| {
-            if i == 4 {
-                pieces = f
-                    .walls()
-                    .iter()
-                    .filter(|w| truth_of(&scene, w) == Some(2))
-                    .count();
-            }
-        },
-    );
+    let run = drive(&scene, &poses, &laser, exact_start(&poses), 5, |i, f, _| {
+        if i == 10 {
+            pieces = f
+                .walls()
+                .iter()
+                .filter(|w| truth_of(&scene, w) == Some(2))
+                .count();
+        }
+    });
     assert_eq!(pieces, 2, "the north wall starts as two pieces");
     let whole: Vec<&MapWall> = run
         .filter
@@ -490,7 +494,7 @@ fn a_wall_first_seen_in_two_pieces_becomes_one() {
         .filter(|w| truth_of(&scene, w) == Some(2))
         .collect();
     assert_eq!(whole.len(), 1, "{whole:#?}");
-    assert!(whole[0].length_m() > 6.0, "{:?}", whole[0]);
+    assert!(whole[0].length_m() > 7.0, "{:?}", whole[0]);
     assert_eq!(run.false_matches, 0);
 }
 
@@ -605,4 +609,52 @@ fn two_parallel_walls_ten_centimetres_apart_are_never_confused() {
         .collect();
     assert_eq!(got, expected, "{update:?}");
     assert!((filter.pose().y - 2.0).abs() < 0.02, "{:?}", filter.pose());
+}
+
+#[test]
+fn pieces_of_one_line_in_a_scan_count_once() {
+    // The north wall of a known room seen in two pieces (a door between):
+    // both are that wall, and together they inform the pose no more than
+    // the better one alone would.
+    let scene = room(6.0, 4.0);
+    let map = {
+        let built = drive(
+            &scene,
+            &loop_in_room(),
+            &Laser::default(),
+            exact_start(&loop_in_room()),
+            9,
+            |_, _, _| {},
+        );
+        built.filter.map()
+    };
+    let config = WallMapConfig {
+        extend_map: false,
+        ..WallMapConfig::default()
+    };
+    let pose = Pose2::new(3.0, 2.0, std::f64::consts::FRAC_PI_2);
+    let rough = Matrix3::from_diagonal(&nalgebra::Vector3::new(0.01, 0.01, 1e-4));
+    let piece = |x0: f64, x1: f64| Wall {
+        d_m: 2.0,
+        gamma_rad: 0.0,
+        covariance: Matrix2::new(1e-4, 0.0, 0.0, 1e-4),
+        points: 50,
+        rms_residual_m: 0.005,
+        ends: [Point2::new(2.0, 3.0 - x1), Point2::new(2.0, 3.0 - x0)],
+    };
+    let mut both = WallMapEkf::in_map(config.clone(), &map, pose, rough);
+    let update = both.scan(&[piece(0.2, 2.4), piece(3.4, 5.8)]);
+    let north = map
+        .walls
+        .iter()
+        .find(|w| truth_of(&scene, w) == Some(2))
+        .expect("mapped");
+    assert_eq!(update.matched, [(0, north.id), (1, north.id)]);
+    let mut one = WallMapEkf::in_map(config, &map, pose, rough);
+    one.scan(&[piece(0.2, 5.8)]);
+    let (a, b) = (
+        both.pose_covariance()[(1, 1)],
+        one.pose_covariance()[(1, 1)],
+    );
+    assert!((a - b).abs() < 0.05 * b, "two pieces {a}, one line {b}");
 }
