@@ -69,3 +69,35 @@ fn odometry_from_a_log_without_odom_lines_is_refused() {
         "{err}"
     );
 }
+
+#[test]
+fn a_reference_log_without_the_scans_stamps_is_refused_with_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let ranges = vec!["2.0"; 181].join(" ");
+    let log = dir.path().join("run.log");
+    std::fs::write(
+        &log,
+        format!("FLASER 181 {ranges} 0 0 0 0 0 0 1.5 host 1.5\n"),
+    )
+    .unwrap();
+    // The reference was logged at another time: no scan within 5 ms.
+    let other = dir.path().join("reference.log");
+    std::fs::write(
+        &other,
+        format!("FLASER 181 {ranges} 0 0 0 0 0 0 9.5 host 9.5\n"),
+    )
+    .unwrap();
+    let job = LogReplayJob {
+        log,
+        reference: Reference::Log(other),
+        odometry: OdometrySource::Scan,
+        odom_noise: None,
+        out: None,
+        rpe_distance_m: 1.0,
+    };
+    let err = run_log_replay(&job, |_, _| {}).unwrap_err().to_string();
+    assert!(
+        err.contains("reference.log") && err.contains("scan on line 1"),
+        "{err}"
+    );
+}

@@ -29,7 +29,7 @@ use stucco_nav::{
     Displacement, Pairs, Rpe, ScanPoints, WallMapConfig, WallMapEkf, WallRole, relative_pose_error,
 };
 
-use crate::carmen::{LaserKind, LoggedScan, OdomRecord, Record, open_carmen_file};
+use crate::carmen::{LaserKind, LoggedScan, OdomRecord, read_carmen_file};
 use crate::plan_view::{PlanPath, draw_plan};
 use crate::walls::{ExtractorKind, laser_for_logs, make_extractor};
 
@@ -257,24 +257,17 @@ fn odometry_at(odom: &[OdomRecord], t: Stamp) -> Option<Pose2> {
     ))
 }
 
-/// The front-laser scans and the `ODOM` readings of a log.
+/// The front-laser scans and the `ODOM` readings (by stamp) of a log.
 fn read_log(path: &Path) -> Result<(Vec<LoggedScan>, Vec<OdomRecord>)> {
-    let mut scans = Vec::new();
-    let mut odom = Vec::new();
-    for record in open_carmen_file(path)? {
-        match record? {
-            Record::Laser(s) if s.kind != LaserKind::Rear => scans.push(s),
-            Record::Odometry(o) => odom.push(o),
-            _ => {}
-        }
-    }
+    let mut log = read_carmen_file(path)?;
+    log.scans.retain(|s| s.kind != LaserKind::Rear);
     ensure!(
-        !scans.is_empty(),
+        !log.scans.is_empty(),
         "{}: the log holds no front-laser scans",
         path.display()
     );
-    odom.sort_by_key(|o| o.stamp);
-    Ok((scans, odom))
+    log.odometry.sort_by_key(|o| o.stamp);
+    Ok((log.scans, log.odometry))
 }
 
 /// `odometry` made worse by `noise`, step by step.

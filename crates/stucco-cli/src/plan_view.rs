@@ -18,7 +18,8 @@ pub struct PlanPath<'a> {
 }
 
 /// Draws `segments` (black; grey when the flag is set), `paths` and
-/// `marks` (red dots) into an SVG at `path`.
+/// `marks` (red dots) into an SVG at `path`, the axes square around all of
+/// them.
 pub fn draw_plan(
     path: &Path,
     caption: &str,
@@ -83,7 +84,7 @@ pub fn draw_plan(
         }))
         .map_err(|e| err(&e))?;
     chart
-        .draw_series(marks.iter().map(|d| Circle::new(*d, 2, RED.filled())))
+        .draw_series(marks.iter().map(|d| Circle::new(*d, 4, RED.filled())))
         .map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())

@@ -6,6 +6,7 @@
 
 use crate::mission::{BadInput, Mission};
 use crate::navigator::Navigator;
+use crate::plan_view::{PlanPath, PlanSegment, draw_plan};
 use crate::record::{RecordedMission, Recorder};
 use anyhow::{Context, Result};
 use nalgebra::{Point2, SVector};
@@ -1000,74 +1001,47 @@ fn draw_run(
     trace: &Trace,
     est: &stucco_mission::Estimate,
 ) -> Result<()> {
-    use plotters::prelude::*;
-    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("drawing {}: {e}", path.display());
-    let walls: Vec<((f64, f64), (f64, f64))> = layout
+    let walls: Vec<PlanSegment> = layout
         .walls
         .iter()
         .map(|w| {
             (
                 (w.a.x - origin[0], w.a.y - origin[1]),
                 (w.b.x - origin[0], w.b.y - origin[1]),
+                false,
             )
         })
         .collect();
     let [xs, ys] = est.room_m;
-    let span = xs.max(ys) + 1.0;
-    let (cx, cy) = (xs / 2.0, ys / 2.0);
-    let root = SVGBackend::new(path, (900, 900)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "stucco run: true walls (black), room estimated (green), true path (blue), estimated path (red), doors found (orange)",
-            ("sans-serif", 13),
-        )
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(40)
-        .build_cartesian_2d(
-            cx - span / 2.0..cx + span / 2.0,
-            cy - span / 2.0..cy + span / 2.0,
-        )
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("x in the room (m)")
-        .y_desc("y in the room (m)")
-        .draw()
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(
-            walls
-                .iter()
-                .map(|(a, b)| PathElement::new(vec![*a, *b], BLACK.stroke_width(2))),
-        )
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(std::iter::once(PathElement::new(
-            vec![(0.0, 0.0), (xs, 0.0), (xs, ys), (0.0, ys), (0.0, 0.0)],
-            GREEN.stroke_width(1),
-        )))
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(LineSeries::new(
-            trace.truth.iter().map(|p| (p[0], p[1])),
-            BLUE.mix(0.6),
-        ))
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(LineSeries::new(
-            trace.estimated.iter().map(|p| (p[0], p[1])),
-            RED.mix(0.6),
-        ))
-        .map_err(|e| err(&e))?;
-    chart
-        .draw_series(est.doors.iter().map(|d| {
-            let g = WallGeometry::of(d.wall, est.room_m);
-            let c = g.point(d.position_m, 0.0);
-            Circle::new((c.x, c.y), 6, RGBColor(255, 140, 0).filled())
-        }))
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    let room = [(0.0, 0.0), (xs, 0.0), (xs, ys), (0.0, ys), (0.0, 0.0)];
+    let xy = |p: &[[f64; 2]]| p.iter().map(|q| (q[0], q[1])).collect::<Vec<_>>();
+    let (truth, estimated) = (xy(&trace.truth), xy(&trace.estimated));
+    let doors: Vec<(f64, f64)> = est
+        .doors
+        .iter()
+        .map(|d| {
+            let c = WallGeometry::of(d.wall, est.room_m).point(d.position_m, 0.0);
+            (c.x, c.y)
+        })
+        .collect();
+    draw_plan(
+        path,
+        "stucco run: true walls (black), room estimated (green), true path (blue), estimated path (red), doors found (red dots)",
+        &walls,
+        &[
+            PlanPath {
+                points: &room,
+                color: plotters::style::GREEN,
+            },
+            PlanPath {
+                points: &truth,
+                color: plotters::style::BLUE,
+            },
+            PlanPath {
+                points: &estimated,
+                color: plotters::style::RED,
+            },
+        ],
+        &doors,
+    )
 }

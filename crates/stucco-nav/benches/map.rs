@@ -50,7 +50,7 @@ fn floor(n: usize) -> Vec<MapWall> {
                 covariance: Matrix2::new(1e-4, 0.0, 0.0, 1e-6),
                 extent_m: [0.0, 0.0],
                 observations: 10,
-                seen_through: 0,
+                wall_behind_scans: 0,
                 role: WallRole::Wall,
             };
             w.rho_m = w.normal().dot(&a.coords);

@@ -555,8 +555,8 @@ impl WallMapEkf {
             });
             if behind_it {
                 let w = &mut self.walls[f];
-                w.seen_through += 1;
-                if w.seen_through >= cfg.in_front_scans {
+                w.wall_behind_scans += 1;
+                if w.wall_behind_scans >= cfg.in_front_scans {
                     w.role = WallRole::InFront;
                     marked.push(w.id);
                 }
@@ -670,7 +670,7 @@ impl WallMapEkf {
             covariance: own,
             extent_m,
             observations: 1,
-            seen_through: 0,
+            wall_behind_scans: 0,
             role: WallRole::Wall,
         });
         id
@@ -742,7 +742,7 @@ impl WallMapEkf {
         let ends = self.walls[drop].ends();
         let keep_id = self.walls[keep].id;
         let kept = self.walls[drop].observations;
-        let through = self.walls[drop].seen_through;
+        let through = self.walls[drop].wall_behind_scans;
         let order: Vec<usize> = (0..n).filter(|&k| k != rd && k != rd + 1).collect();
         self.x = DVector::from_iterator(order.len(), order.iter().map(|&k| self.x[k]));
         self.p = self.p.select_rows(&order).select_columns(&order);
@@ -755,7 +755,7 @@ impl WallMapEkf {
         let [a, b] = ends.map(|e| w.along(&e));
         w.extent_m = [w.extent_m[0].min(a.min(b)), w.extent_m[1].max(a.max(b))];
         w.observations += kept;
-        w.seen_through = w.seen_through.max(through);
+        w.wall_behind_scans = w.wall_behind_scans.max(through);
     }
 }
 

@@ -284,7 +284,7 @@ impl RoomSearch {
             lines.iter().any(|near| {
                 near.evidence > 0.0
                     && far.d - near.d > SEEN_THROUGH_M
-                    && seen_through(pts, &n, near.d, far.d, gate)
+                    && wall_behind_scans(pts, &n, near.d, far.d, gate)
             })
         };
         let walls: Vec<&Line> = lines
@@ -470,7 +470,7 @@ fn line_evidence(
 /// True when most of the echoes on the line at `far` passed the line at
 /// `near` within an opening's width of where `near` itself was seen: `far`
 /// is seen through a gap in `near` (an open door).
-fn seen_through(pts: &[ScanPoint], n: &Vector2<f64>, near: f64, far: f64, gate: f64) -> bool {
+fn wall_behind_scans(pts: &[ScanPoint], n: &Vector2<f64>, near: f64, far: f64, gate: f64) -> bool {
     let u = Vector2::new(-n.y, n.x);
     let on_near: Vec<f64> = pts
         .iter()

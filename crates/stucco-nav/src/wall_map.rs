@@ -41,7 +41,7 @@ pub struct MapWall {
     /// How many scans it was matched in.
     pub observations: u32,
     /// How many scans saw a wall close behind it, across its stretch.
-    pub seen_through: u32,
+    pub wall_behind_scans: u32,
     /// What it is taken to be.
     pub role: WallRole,
 }
@@ -120,7 +120,7 @@ mod tests {
             covariance: Matrix2::identity(),
             extent_m: [-1.0, 2.0],
             observations: 1,
-            seen_through: 0,
+            wall_behind_scans: 0,
             role: WallRole::Wall,
         };
         assert_eq!(w.in_front(&Point2::origin()), 3.0);

@@ -556,7 +556,7 @@ fn two_parallel_walls_ten_centimetres_apart_are_never_confused() {
             covariance: Matrix2::new(1e-6, 0.0, 0.0, 1e-8),
             extent_m: [0.0, 0.0],
             observations: 50,
-            seen_through: 0,
+            wall_behind_scans: 0,
             role: WallRole::Wall,
         };
         let (a, b) = (w.along(&s.a), w.along(&s.b));
