@@ -10,7 +10,7 @@ use stucco_core::{Command, Reply};
 /// The robot's zenoh configuration: users from `dictionary`, operators
 /// `ann`, viewers `vic`, everything else denied.
 fn robot_config(dictionary: &Path) -> String {
-    let watch = r#"["stucco/r1/state", "stucco/r1/events", "stucco/r1/acks", "stucco/r1/heartbeat", "stucco/r1/info"]"#;
+    let watch = r#"["stucco/r1/state", "stucco/r1/events", "stucco/r1/acks", "stucco/r1/heartbeat", "stucco/r1/info", "stucco/r1/map", "stucco/r1/scan", "stucco/r1/coverage"]"#;
     format!(
         r#"{{
   mode: "peer",
@@ -19,10 +19,14 @@ fn robot_config(dictionary: &Path) -> String {
     enabled: true,
     default_permission: "deny",
     rules: [
-      {{ id: "command", messages: ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable"],
+      {{ id: "command", messages: ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
+                   "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"],
          flows: ["ingress", "egress"], permission: "allow", key_exprs: ["stucco/r1/**"] }},
-      {{ id: "watch", messages: ["put", "declare_subscriber", "query", "reply", "declare_queryable"],
+      {{ id: "watch", messages: ["put", "declare_subscriber", "query", "reply", "declare_queryable",
+                   "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"],
          flows: ["ingress", "egress"], permission: "allow", key_exprs: {watch} }},
+      {{ id: "see-commands", messages: ["declare_queryable"], flows: ["egress"], permission: "allow",
+         key_exprs: ["stucco/r1/cmd"] }},
     ],
     subjects: [
       {{ id: "operators", usernames: ["ann"] }},
@@ -30,7 +34,7 @@ fn robot_config(dictionary: &Path) -> String {
     ],
     policies: [
       {{ rules: ["command"], subjects: ["operators"] }},
-      {{ rules: ["watch"], subjects: ["viewers"] }},
+      {{ rules: ["watch", "see-commands"], subjects: ["viewers"] }},
     ],
   }},
 }}"#,
@@ -104,5 +108,25 @@ fn only_operators_may_command_viewers_may_watch() {
     if let Ok(mut intruder) = as_user("ann", "guess") {
         assert!(intruder.send("r1", Command::Status, 2.0, None).is_err());
     }
-    robot.stop();
+    // The robot knows who tried: every refusal of the viewer's commands is
+    // logged and kept, naming the viewer.
+    let run = robot.stop();
+    let refused: Vec<_> = run
+        .denials
+        .iter()
+        .filter(|d| d.key == "stucco/r1/cmd" && d.action.starts_with("Query"))
+        .collect();
+    assert!(!refused.is_empty(), "no refusal logged: {:?}", run.denials);
+    assert!(
+        refused.iter().all(|d| d.subject.contains("Username(vic)")),
+        "{refused:?}"
+    );
+    // Nothing of the operator's was refused.
+    assert!(
+        run.denials
+            .iter()
+            .all(|d| !d.subject.contains("Username(ann)")),
+        "{:?}",
+        run.denials
+    );
 }

@@ -27,7 +27,7 @@ fn run_mission_file(name: &str, runs: Option<u64>) -> anyhow::Result<stucco_cli:
 /// [`RunningRobot::stop`] is called (or when dropped).
 pub struct RunningRobot {
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    thread: Option<std::thread::JoinHandle<anyhow::Result<f64>>>,
+    thread: Option<std::thread::JoinHandle<anyhow::Result<stucco_cli::RobotRun>>>,
 }
 
 impl RunningRobot {
@@ -53,19 +53,19 @@ impl RunningRobot {
         }
     }
 
-    /// Stops it and checks it ran without error.
-    pub fn stop(mut self) {
-        self.halt().unwrap();
+    /// Stops it, checks it ran without error and returns how it ended.
+    pub fn stop(mut self) -> stucco_cli::RobotRun {
+        self.halt().unwrap().unwrap()
     }
 
-    fn halt(&mut self) -> anyhow::Result<()> {
+    fn halt(&mut self) -> anyhow::Result<Option<stucco_cli::RobotRun>> {
         self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
         match self.thread.take() {
             Some(t) => t
                 .join()
                 .map_err(|_| anyhow::anyhow!("the robot panicked"))?
-                .map(|_| ()),
-            None => Ok(()),
+                .map(Some),
+            None => Ok(None),
         }
     }
 }

@@ -18,6 +18,7 @@
 mod carmen;
 mod experiments;
 mod log_replay;
+mod logging;
 mod mission;
 mod navigator;
 mod op;
@@ -35,14 +36,15 @@ pub use log_replay::{
     LogReplayJob, LogReplayReport, OdomNoise, OdometrySource, OdometryTrust, RPE_PAIR_DISTANCE_M,
     Reference, run_log_replay,
 };
+pub use logging::init_logging;
 pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
 pub use op::{BenchReport, CommandResult, EventFeed, Operator};
 pub use plastering::{PlasterReport, PredictedScores, WorldState, sprayer_of, time_lower_bound};
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
-pub use robot::{RobotJob, RobotState, run_robot};
+pub use robot::{RobotJob, RobotRun, RobotState, run_robot};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
-pub use stucco_link::{Faults, FaultyRelay, LinkConfig, Mode as LinkMode, router};
+pub use stucco_link::{Denial, Faults, FaultyRelay, LinkConfig, Mode as LinkMode, router};
 pub use task_mission::{
     Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,
     run_task_mission, write_atomic,

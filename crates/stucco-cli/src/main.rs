@@ -724,8 +724,13 @@ fn main() -> ExitCode {
                 job.name, job.name
             );
             match run_robot(&job, &Arc::new(AtomicBool::new(false))) {
-                Ok(sim) => {
-                    eprintln!("robot {}: {sim:.1} s simulated", job.name);
+                Ok(run) => {
+                    eprintln!(
+                        "robot {}: {:.1} s simulated, {} message(s) refused by access control",
+                        job.name,
+                        run.simulated_s,
+                        run.denials.len()
+                    );
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail(&e),

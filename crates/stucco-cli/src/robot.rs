@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use stucco_core::{DriveCommand, Pose2, Stamp};
-use stucco_link::{LinkConfig, RobotLink};
+use stucco_link::{Denial, LinkConfig, RobotLink};
 use stucco_mission::{BehaviourKind, Hazard, Inputs, MissionMode};
 use stucco_sim::Layout;
 
@@ -54,9 +54,20 @@ pub struct RobotState<'a> {
     pub drive: DriveCommand,
 }
 
-/// Runs the robot until `stop` is set or the job's time is up; returns the
-/// simulated seconds run.
-pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
+/// How a robot's run ended.
+#[derive(Clone, Debug, Serialize)]
+pub struct RobotRun {
+    /// Simulated seconds run.
+    pub simulated_s: f64,
+    /// What zenoh's access control refused on the robot's keys, in order
+    /// (each one also logged as it came).
+    pub denials: Vec<Denial>,
+}
+
+/// Runs the robot until `stop` is set or the job's time is up. Installs the
+/// process's log ([`crate::init_logging`]) if none is installed.
+pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
+    crate::init_logging();
     let mission = Mission::load(&job.mission)?;
     let known = mission
         .start
@@ -79,11 +90,19 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
     nav.discover_doors(true);
     let mut exec = mission.executive(false);
     let session = stucco_link::open(&job.link).context("joining the zenoh network")?;
+    if job.link.config_file.is_none() {
+        tracing::warn!(
+            robot = %job.name,
+            "no --zenoh-config: the link is open, anyone who reaches this robot may command it \
+             (fine on one machine; see README, \"Who may command\")"
+        );
+    }
     let mut link = RobotLink::new(&session, &job.name)?;
     let t0 = Instant::now();
     let mut bumper = false;
     let mut step = 0u64;
     let mut heard: Option<Instant> = None;
+    let mut denials = Vec::new();
     // The link's timeout on the wall clock.
     let link_timeout = Duration::from_secs_f64(mission.failsafe.link_timeout_s / job.speed);
     loop {
@@ -91,6 +110,10 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
         let sim_s = now.as_secs_f64();
         if link.operator_heartbeat() {
             heard = Some(Instant::now());
+        }
+        for d in link.denials() {
+            tracing::warn!(robot = %job.name, zid = %d.zid, "{d}");
+            denials.push(d);
         }
         if let Some(h) = heard {
             exec.link(now, h.elapsed() <= link_timeout);
@@ -144,5 +167,8 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<f64> {
             }
         }
     }
-    Ok(nav.now().as_secs_f64())
+    Ok(RobotRun {
+        simulated_s: nav.now().as_secs_f64(),
+        denials,
+    })
 }

@@ -16,8 +16,15 @@
 //!
 //! JSON throughout, so any zenoh client (Python, C, the zenoh CLI tools)
 //! can command and watch a robot.
+//!
+//! What zenoh's access control refuses reaches the robot through
+//! [`audit`]: [`RobotLink::denials`].
 
+pub mod audit;
+
+pub use audit::Denial;
 use serde::Serialize;
+use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 use stucco_core::{Ack, Reply, Stamp, Telecommand};
 use zenoh::Wait;
@@ -169,6 +176,7 @@ pub struct RobotLink {
     events: Publisher<'static>,
     heartbeat: Publisher<'static>,
     operators: Subscriber<FifoChannelHandler<Sample>>,
+    denials: Receiver<Denial>,
 }
 
 impl RobotLink {
@@ -196,7 +204,15 @@ impl RobotLink {
                 .declare_subscriber(keys::operator(name))
                 .wait()
                 .map_err(z)?,
+            denials: audit::listen(format!("stucco/{name}/")),
         })
+    }
+
+    /// What zenoh's access control refused on this robot's keys since the
+    /// last call (seen only where [`audit::layer`] is part of the process's
+    /// tracing subscriber).
+    pub fn denials(&mut self) -> Vec<Denial> {
+        self.denials.try_iter().collect()
     }
 
     /// True when an operator's heartbeat came since the last call.
