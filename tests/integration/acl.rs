@@ -1,51 +1,153 @@
-//! Who may command: zenoh's own user/password authentication and access
-//! control in the robot's embedded peer. An operator may command and
-//! watch; a viewer may watch, and its commands never reach the robot.
+//! Who may command: zenoh's own authentication (user/password, or TLS
+//! certificates with mutual authentication) and access control in the
+//! robot's embedded peer. An operator may command and watch; a viewer may
+//! watch, its commands never reach the executive and the robot logs who
+//! tried; an outsider joins nothing.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 use stucco_cli::{LinkConfig, Operator};
 use stucco_core::{Command, Reply};
 
-/// The robot's zenoh configuration: users from `dictionary`, operators
-/// `ann`, viewers `vic`, everything else denied.
-fn robot_config(dictionary: &Path) -> String {
-    let watch = r#"["stucco/r1/state", "stucco/r1/events", "stucco/r1/acks", "stucco/r1/heartbeat", "stucco/r1/info", "stucco/r1/map", "stucco/r1/scan", "stucco/r1/coverage"]"#;
+/// Robot `name`'s zenoh configuration: `transport` says how peers
+/// authenticate; subjects are matched by `subject_key` (`usernames` or
+/// `cert_common_names`): operators `ann`, viewers `vic`, everything else
+/// denied.
+fn robot_config(name: &str, transport: &str, subject_key: &str) -> String {
+    let watch = [
+        "state",
+        "events",
+        "acks",
+        "heartbeat",
+        "info",
+        "map",
+        "scan",
+        "coverage",
+    ]
+    .map(|k| format!("stucco/{name}/{k}"));
+    let watch = serde_json::to_string(&watch).unwrap();
     format!(
         r#"{{
   mode: "peer",
-  transport: {{ auth: {{ usrpwd: {{ user: "r1", password: "robot-secret", dictionary_file: "{dict}" }} }} }},
+  transport: {transport},
   access_control: {{
     enabled: true,
     default_permission: "deny",
     rules: [
       {{ id: "command", messages: ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
                    "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"],
-         flows: ["ingress", "egress"], permission: "allow", key_exprs: ["stucco/r1/**"] }},
+         flows: ["ingress", "egress"], permission: "allow", key_exprs: ["stucco/{name}/**"] }},
       {{ id: "watch", messages: ["put", "declare_subscriber", "query", "reply", "declare_queryable",
                    "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"],
          flows: ["ingress", "egress"], permission: "allow", key_exprs: {watch} }},
       {{ id: "see-commands", messages: ["declare_queryable"], flows: ["egress"], permission: "allow",
-         key_exprs: ["stucco/r1/cmd"] }},
+         key_exprs: ["stucco/{name}/cmd"] }},
     ],
     subjects: [
-      {{ id: "operators", usernames: ["ann"] }},
-      {{ id: "viewers", usernames: ["vic"] }},
+      {{ id: "operators", {subject_key}: ["ann"] }},
+      {{ id: "viewers", {subject_key}: ["vic"] }},
     ],
     policies: [
       {{ rules: ["command"], subjects: ["operators"] }},
       {{ rules: ["watch", "see-commands"], subjects: ["viewers"] }},
     ],
   }},
-}}"#,
-        dict = dictionary.display()
+}}"#
     )
 }
 
-fn client_config(user: &str, password: &str) -> String {
-    format!(
-        r#"{{ mode: "peer", transport: {{ auth: {{ usrpwd: {{ user: "{user}", password: "{password}" }} }} }} }}"#
-    )
+/// How the peers of one scenario join.
+struct Site<'a> {
+    dir: &'a Path,
+    /// The robot's name (one per test: the tests share a process).
+    name: &'a str,
+    /// The robot's configuration file.
+    robot: PathBuf,
+    listen: String,
+    connect: String,
+    /// The zenoh configuration (JSON5) of a peer with these credentials.
+    peer: &'a dyn Fn(&str) -> String,
+    /// How zenoh names user `ann`'s or `vic`'s subject, e.g. `Username(vic)`.
+    subject: &'a dyn Fn(&str) -> String,
+}
+
+impl Site<'_> {
+    fn join(&self, credentials: &str, identity: &str) -> anyhow::Result<Operator> {
+        let cfg = self.dir.join(format!("{credentials}.json5"));
+        std::fs::write(&cfg, (self.peer)(credentials)).unwrap();
+        let link = LinkConfig {
+            connect: vec![self.connect.clone()],
+            config_file: Some(cfg),
+            ..LinkConfig::default()
+        };
+        Operator::connect(&link, identity)
+    }
+
+    /// The operator commands, the viewer watches and is refused (and
+    /// named in the robot's log), each of `outsiders` reaches nothing.
+    fn check(&self, outsiders: &[&str]) {
+        let name = self.name;
+        let robot = crate::RunningRobot::start(
+            name,
+            LinkConfig {
+                listen: vec![self.listen.clone()],
+                config_file: Some(self.robot.clone()),
+                ..LinkConfig::default()
+            },
+            10.0,
+        );
+        let mut ann = self.join("ann", "ann").unwrap();
+        let mut vic = self.join("vic", "vic").unwrap();
+        // The viewer watches the robot...
+        assert!(vic.state(name, Duration::from_secs(3)).is_ok());
+        // ...but none of its commands reaches it: no reply, nothing done.
+        for command in [
+            Command::Status,
+            Command::MoveRelative {
+                dx_m: 0.5,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+            },
+            Command::Stop,
+        ] {
+            let err = vic.send(name, command, 2.0, None);
+            assert!(err.is_err(), "a viewer's command got through: {err:?}");
+        }
+        let state = ann.state(name, Duration::from_secs(3)).unwrap();
+        assert_eq!(state["task"][1], "wait_for_operator", "{state}");
+        // The operator commands.
+        let r = ann.send(name, Command::Status, 10.0, None).unwrap();
+        assert_eq!(r.ack.reply, Reply::Done);
+        // An outsider joins nothing: either the session is refused, or it
+        // reaches no robot.
+        for credentials in outsiders {
+            if let Ok(mut intruder) = self.join(credentials, "ann") {
+                let r = intruder.send(name, Command::Status, 2.0, None);
+                assert!(r.is_err(), "{credentials} got through: {r:?}");
+            }
+        }
+        // The robot knows who tried: every refusal of the viewer's
+        // commands is logged and kept, naming the viewer.
+        let run = robot.stop();
+        let refused: Vec<_> = run
+            .denials
+            .iter()
+            .filter(|d| d.key == format!("stucco/{name}/cmd") && d.action.starts_with("Query"))
+            .collect();
+        assert!(!refused.is_empty(), "no refusal logged: {:?}", run.denials);
+        let vic = (self.subject)("vic");
+        assert!(
+            refused.iter().all(|d| d.subject.contains(&vic)),
+            "{refused:?}"
+        );
+        // Nothing of the operator's was refused.
+        let ann = (self.subject)("ann");
+        assert!(
+            run.denials.iter().all(|d| !d.subject.contains(&ann)),
+            "{:?}",
+            run.denials
+        );
+    }
 }
 
 #[test]
@@ -57,76 +159,141 @@ fn only_operators_may_command_viewers_may_watch() {
         "ann:ann-secret\nvic:vic-secret\nr1:robot-secret\n",
     )
     .unwrap();
-    let robot_cfg = dir.path().join("robot.json5");
-    std::fs::write(&robot_cfg, robot_config(&dictionary)).unwrap();
-    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    let robot = crate::RunningRobot::start(
-        "r1",
-        LinkConfig {
-            listen: vec![endpoint.clone()],
-            config_file: Some(robot_cfg),
-            ..LinkConfig::default()
-        },
-        10.0,
+    let robot = dir.path().join("robot.json5");
+    let transport = format!(
+        r#"{{ auth: {{ usrpwd: {{ user: "r1", password: "robot-secret", dictionary_file: "{}" }} }} }}"#,
+        dictionary.display()
     );
-    let as_user = |user: &str, password: &str| {
-        let cfg = dir.path().join(format!("{user}.json5"));
-        std::fs::write(&cfg, client_config(user, password)).unwrap();
-        Operator::connect(
-            &LinkConfig {
-                connect: vec![endpoint.clone()],
-                config_file: Some(cfg),
-                ..LinkConfig::default()
-            },
-            user,
+    std::fs::write(&robot, robot_config("r1", &transport, "usernames")).unwrap();
+    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
+    // Credentials are `user` (the right password) or `user:password`.
+    let peer = |credentials: &str| {
+        let (user, password) = credentials
+            .split_once(':')
+            .map_or((credentials, format!("{credentials}-secret")), |(u, p)| {
+                (u, p.to_owned())
+            });
+        format!(
+            r#"{{ mode: "peer", transport: {{ auth: {{ usrpwd: {{ user: "{user}", password: "{password}" }} }} }} }}"#
         )
     };
-    let mut ann = as_user("ann", "ann-secret").unwrap();
-    let mut vic = as_user("vic", "vic-secret").unwrap();
-    // The viewer watches the robot...
-    assert!(vic.state("r1", Duration::from_secs(3)).is_ok());
-    // ...but none of its commands reaches it: no reply, nothing done.
-    for command in [
-        Command::Status,
-        Command::MoveRelative {
-            dx_m: 0.5,
-            dy_m: 0.0,
-            dtheta_deg: 0.0,
-        },
-        Command::Stop,
-    ] {
-        let err = vic.send("r1", command, 2.0, None);
-        assert!(err.is_err(), "a viewer's command got through: {err:?}");
+    Site {
+        dir: dir.path(),
+        name: "r1",
+        robot,
+        listen: endpoint.clone(),
+        connect: endpoint,
+        peer: &peer,
+        subject: &|user| format!("Username({user})"),
     }
-    let state = ann.state("r1", Duration::from_secs(3)).unwrap();
-    assert_eq!(state["task"][1], "wait_for_operator", "{state}");
-    // The operator commands.
-    let r = ann.send("r1", Command::Status, 10.0, None).unwrap();
-    assert_eq!(r.ack.reply, Reply::Done);
-    // A wrong password joins nothing: either the session is refused, or
-    // it reaches no robot.
-    if let Ok(mut intruder) = as_user("ann", "guess") {
-        assert!(intruder.send("r1", Command::Status, 2.0, None).is_err());
+    .check(&["ann:guess"]);
+}
+
+/// A certificate authority and the certificates it signs, as PEM files.
+struct Authority {
+    issuer: rcgen::CertifiedIssuer<'static, rcgen::KeyPair>,
+    dir: PathBuf,
+}
+
+impl Authority {
+    fn new(dir: &Path, name: &str) -> Self {
+        let mut params = rcgen::CertificateParams::new(Vec::<String>::new()).unwrap();
+        params.is_ca = rcgen::IsCa::Ca(rcgen::BasicConstraints::Unconstrained);
+        params
+            .distinguished_name
+            .push(rcgen::DnType::CommonName, name);
+        let issuer =
+            rcgen::CertifiedIssuer::self_signed(params, rcgen::KeyPair::generate().unwrap())
+                .unwrap();
+        let dir = dir.join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("ca.pem"), issuer.pem()).unwrap();
+        Authority { issuer, dir }
     }
-    // The robot knows who tried: every refusal of the viewer's commands is
-    // logged and kept, naming the viewer.
-    let run = robot.stop();
-    let refused: Vec<_> = run
-        .denials
-        .iter()
-        .filter(|d| d.key == "stucco/r1/cmd" && d.action.starts_with("Query"))
-        .collect();
-    assert!(!refused.is_empty(), "no refusal logged: {:?}", run.denials);
-    assert!(
-        refused.iter().all(|d| d.subject.contains("Username(vic)")),
-        "{refused:?}"
-    );
-    // Nothing of the operator's was refused.
-    assert!(
-        run.denials
-            .iter()
-            .all(|d| !d.subject.contains("Username(ann)")),
-        "{:?}",
-        run.denials
-    );
+
+    fn root(&self) -> PathBuf {
+        self.dir.join("ca.pem")
+    }
+
+    /// A certificate with common name `cn` (valid for `localhost` and
+    /// 127.0.0.1): its certificate and key files.
+    fn sign(&self, cn: &str) -> (PathBuf, PathBuf) {
+        let mut params =
+            rcgen::CertificateParams::new(vec!["localhost".to_owned(), "127.0.0.1".to_owned()])
+                .unwrap();
+        params
+            .distinguished_name
+            .push(rcgen::DnType::CommonName, cn);
+        let key = rcgen::KeyPair::generate().unwrap();
+        let cert = params.signed_by(&key, &self.issuer).unwrap();
+        let (c, k) = (
+            self.dir.join(format!("{cn}.pem")),
+            self.dir.join(format!("{cn}.key")),
+        );
+        std::fs::write(&c, cert.pem()).unwrap();
+        std::fs::write(&k, key.serialize_pem()).unwrap();
+        (c, k)
+    }
+}
+
+/// The TLS settings of a peer holding `cert`/`key`, trusting `root`, with
+/// mutual authentication.
+fn tls(root: &Path, cert: &Path, key: &Path) -> String {
+    let (root, cert, key) = (root.display(), cert.display(), key.display());
+    format!(
+        r#"{{ link: {{ tls: {{ root_ca_certificate: "{root}", enable_mtls: true,
+            listen_certificate: "{cert}", listen_private_key: "{key}",
+            connect_certificate: "{cert}", connect_private_key: "{key}" }} }} }}"#
+    )
+}
+
+/// A TCP port free a moment ago (TLS runs over TCP; never a fixed port).
+fn free_port() -> u16 {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    l.local_addr().unwrap().port()
+}
+
+#[test]
+fn with_tls_certificates_only_operators_may_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let site = Authority::new(dir.path(), "site-ca");
+    let stranger = Authority::new(dir.path(), "stranger-ca");
+    let (cert, key) = site.sign("r2");
+    let robot = dir.path().join("robot.json5");
+    std::fs::write(
+        &robot,
+        robot_config("r2", &tls(&site.root(), &cert, &key), "cert_common_names"),
+    )
+    .unwrap();
+    // Credentials: a common name signed by the site's authority,
+    // `stranger:CN` signed by another one, or none at all.
+    let peer = |credentials: &str| {
+        if credentials == "no-certificate" {
+            let root = site.root();
+            return format!(
+                r#"{{ mode: "peer", transport: {{ link: {{ tls: {{ root_ca_certificate: "{}" }} }} }} }}"#,
+                root.display()
+            );
+        }
+        let (ca, cn) = match credentials.split_once(':') {
+            Some((_, cn)) => (&stranger, cn),
+            None => (&site, credentials),
+        };
+        let (cert, key) = ca.sign(cn);
+        format!(
+            r#"{{ mode: "peer", transport: {} }}"#,
+            tls(&site.root(), &cert, &key)
+        )
+    };
+    let port = free_port();
+    Site {
+        dir: dir.path(),
+        name: "r2",
+        robot,
+        listen: format!("tls/127.0.0.1:{port}"),
+        connect: format!("tls/localhost:{port}"),
+        peer: &peer,
+        subject: &|cn| format!("CertCommonName({cn})"),
+    }
+    .check(&["stranger:ann", "no-certificate"]);
 }
