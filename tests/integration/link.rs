@@ -96,6 +96,67 @@ fn an_operator_commands_a_robot_over_zenoh() {
     robot.stop();
 }
 
+/// `stucco op NAME watch`: a person follows the robot in lines (state,
+/// events, replies, the map), a program in JSON messages (scans too).
+#[test]
+fn an_operator_watches_a_robot() {
+    let dir = tempfile::tempdir().unwrap();
+    let (robot, peer) = robot_on_socket(dir.path(), 4.0);
+    let watcher = |json: bool| {
+        let peer = peer.clone();
+        std::thread::spawn(move || {
+            let op = Operator::connect(&peer, "vic").unwrap();
+            let mut lines = Vec::new();
+            op.watch("r1", Some(8.0), json, |l| lines.push(l)).unwrap();
+            lines
+        })
+    };
+    let (person, program) = (watcher(false), watcher(true));
+    std::thread::sleep(Duration::from_millis(500));
+    let mut op = Operator::connect(&peer, "ann").unwrap();
+    let r = op
+        .send(
+            "r1",
+            Command::MoveRelative {
+                dx_m: 0.3,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+            },
+            10.0,
+            Some(Duration::from_secs(30)),
+        )
+        .unwrap();
+    assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done));
+    let person = person.join().unwrap();
+    let text = person.join("\n");
+    let has = |needle: &str| person.iter().any(|l| l.contains(needle));
+    assert!(has("state  running · task"), "{text}");
+    assert!(has("pose ") && has("nearest "), "{text}");
+    assert!(has("map    room "), "{text}");
+    assert!(has("reply  accepted") && has("reply  done"), "{text}");
+    assert!(has("event  task_started"), "{text}");
+    // The map line comes again only when the map changes.
+    let maps = person.iter().filter(|l| l.contains("map    room")).count();
+    assert!(maps < 4, "{text}");
+    let program: Vec<serde_json::Value> = program
+        .join()
+        .unwrap()
+        .iter()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let topic = |t: &'static str| program.iter().filter(move |m| m["topic"] == t);
+    let scan = topic("scan").next().expect("no scan");
+    assert!(
+        scan["message"]["points"].as_array().unwrap().len() > 100,
+        "{scan}"
+    );
+    // Scans 10 a second of the robot's time (here 4× the wall clock).
+    assert!(topic("scan").count() > 100, "{}", topic("scan").count());
+    assert!(topic("map").next().unwrap()["message"]["room_m"].is_array());
+    assert!(topic("state").count() > 100);
+    robot.stop();
+}
+
 /// A site: a router, two robots and an operator connected to it as
 /// clients; the operator sees both robots and commands each by name.
 #[test]

@@ -285,7 +285,9 @@ enum OpAction {
         #[arg(long, default_value_t = 0.5)]
         ttl: f64,
     },
-    /// Follow the robot's state, events and replies.
+    /// Follow the robot: its state, events, replies, map and plastering
+    /// coverage as lines a person reads (with --json, every message as it
+    /// comes, one JSON object a line).
     Watch {
         /// Stop after this many seconds.
         #[arg(long)]
@@ -337,7 +339,7 @@ fn op(
     };
     let command = match action {
         OpAction::Watch { seconds } => {
-            return match operator.watch(&target, seconds, |line| println!("{line}")) {
+            return match operator.watch(&target, seconds, json, |line| println!("{line}")) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => fail(&e),
             };

@@ -6,7 +6,7 @@ use anyhow::{Result, anyhow};
 use serde::Serialize;
 use std::time::{Duration, Instant};
 use stucco_core::{Ack, Command, Reply, Stamp, Telecommand};
-use stucco_link::{LinkConfig, OperatorClient, keys, parse};
+use stucco_link::{LinkConfig, OperatorClient, ScanFrame, keys, parse};
 
 /// Retry period of an unanswered command.
 const RETRY: Duration = Duration::from_millis(500);
@@ -178,61 +178,253 @@ impl Operator {
         Ok(self.client.list(Duration::from_secs(1))?)
     }
 
-    /// Prints `robot`'s state (once a second), events and replies as they
-    /// come, for `seconds` (forever without), and keeps the link up with
-    /// the operator's heartbeat meanwhile.
+    /// Follows `robot` for `seconds` (forever without), handing `print`
+    /// one line for each thing worth telling: its state once a second (with
+    /// the nearest echo of its latest scan), every event and reply as it
+    /// comes, its map when what it has perceived changes, its plastering
+    /// coverage when it moves on. With `json`, the lines are the messages
+    /// themselves, each `{"topic": ..., "message": ...}`. Keeps the link up
+    /// with the operator's heartbeat meanwhile.
     pub fn watch(
         &self,
         robot: &str,
         seconds: Option<f64>,
+        json: bool,
         mut print: impl FnMut(String),
     ) -> Result<()> {
-        let state = self.client.watch(keys::state(robot))?;
-        let events = self.client.watch(keys::events(robot))?;
+        let sub = |key: String| self.client.watch(key);
+        let state = sub(keys::state(robot))?;
+        let events = sub(keys::events(robot))?;
         let acks = self.client.acks(robot)?;
+        let map = sub(keys::map(robot))?;
+        let coverage = sub(keys::coverage(robot))?;
+        let scans = sub(keys::scan(robot))?;
         let until = seconds.map(|s| Instant::now() + Duration::from_secs_f64(s));
         let mut shown = Instant::now() - Duration::from_secs(2);
         let mut beat = Instant::now() - Duration::from_secs(1);
+        let mut view = WatchView::default();
         while until.is_none_or(|u| Instant::now() < u) {
-            // A person watching is the link: their heartbeat, 5 a second.
-            if beat.elapsed() >= Duration::from_millis(200) {
+            // A person watching is the link: their heartbeat, 20 a second
+            // (a robot run faster than the wall clock has its link's
+            // timeout shortened as much).
+            if beat.elapsed() >= Duration::from_millis(50) {
                 self.client.heartbeat(robot, &self.identity)?;
                 beat = Instant::now();
             }
             let mut idle = true;
-            while let Ok(Some(s)) = events.try_recv() {
-                print(format!(
-                    "event  {}",
-                    s.payload().try_to_string().unwrap_or_default()
-                ));
+            let mut emit = |topic: &str, v: serde_json::Value, line: Option<String>| {
                 idle = false;
+                if json {
+                    print(serde_json::json!({ "topic": topic, "message": v }).to_string());
+                } else if let Some(line) = line {
+                    print(line);
+                }
+            };
+            while let Ok(Some(s)) = scans.try_recv() {
+                if let Ok(frame) = ScanFrame::decode(&s.payload().to_bytes()) {
+                    view.nearest_m = frame
+                        .points
+                        .iter()
+                        .map(|p| f64::from(p[0]).hypot(f64::from(p[1])))
+                        .min_by(f64::total_cmp);
+                    if json {
+                        let v = serde_json::json!({
+                            "stamp": frame.stamp,
+                            "points": frame.points,
+                        });
+                        emit("scan", v, None);
+                    }
+                }
             }
-            while let Ok(Some(s)) = acks.try_recv() {
-                print(format!(
-                    "reply  {}",
-                    s.payload().try_to_string().unwrap_or_default()
-                ));
-                idle = false;
+            for (topic, sub) in [("event", &events), ("reply", &acks)] {
+                while let Ok(Some(s)) = sub.try_recv() {
+                    if let Ok(v) = parse::<serde_json::Value>(&s) {
+                        let line = tagged_line(topic, &v);
+                        emit(topic, v, Some(line));
+                    }
+                }
+            }
+            while let Ok(Some(s)) = map.try_recv() {
+                if let Ok(v) = parse::<serde_json::Value>(&s) {
+                    let line = view.map_line(&v);
+                    emit("map", v, line);
+                }
+            }
+            while let Ok(Some(s)) = coverage.try_recv() {
+                if let Ok(v) = parse::<serde_json::Value>(&s) {
+                    let line = view.coverage_line(&v);
+                    emit("coverage", v, line);
+                }
             }
             let mut latest = None;
             while let Ok(Some(s)) = state.try_recv() {
                 latest = Some(s);
             }
             if let Some(s) = latest
-                && shown.elapsed() >= Duration::from_secs(1)
+                && (json || shown.elapsed() >= Duration::from_secs(1))
+                && let Ok(v) = parse::<serde_json::Value>(&s)
             {
-                print(format!(
-                    "state  {}",
-                    s.payload().try_to_string().unwrap_or_default()
-                ));
+                let line = view.state_line(&v);
+                emit("state", v, Some(line));
                 shown = Instant::now();
-                idle = false;
             }
             if idle {
                 std::thread::sleep(Duration::from_millis(20));
             }
         }
         Ok(())
+    }
+}
+
+/// What `stucco op NAME watch` remembers between lines.
+#[derive(Default)]
+struct WatchView {
+    /// The nearest echo of the latest scan, m.
+    nearest_m: Option<f64>,
+    /// The last map and coverage lines shown (shown again only changed).
+    map: String,
+    coverage: String,
+}
+
+/// Seconds of a stamp in a message.
+fn secs(v: &serde_json::Value) -> f64 {
+    v["stamp"].as_i64().unwrap_or(0) as f64 * 1e-9
+}
+
+/// A JSON value in a few words: a string as it is, an object by its tag
+/// (or its only key), anything else compact.
+fn short(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Object(m) => {
+            let tag = ["state", "event", "behaviour", "kind", "reply"]
+                .iter()
+                .find_map(|k| m.get(*k).and_then(|t| t.as_str()));
+            match (tag, m.len()) {
+                (Some(t), _) => t.to_owned(),
+                (None, 1) => m.keys().next().cloned().unwrap_or_default(),
+                _ => v.to_string(),
+            }
+        }
+        serde_json::Value::Null => "-".to_owned(),
+        _ => v.to_string(),
+    }
+}
+
+/// An event or a reply: when, what, and its other fields.
+fn tagged_line(topic: &str, v: &serde_json::Value) -> String {
+    let mut rest = v.clone();
+    let what = match rest.as_object_mut() {
+        Some(m) => {
+            m.remove("stamp");
+            let tag = m
+                .remove("event")
+                .or_else(|| m.remove("reply"))
+                .map(|t| short(&t));
+            if let Some(serde_json::Value::Object(r)) = m.get("reply").cloned() {
+                m.extend(r);
+            }
+            tag.unwrap_or_default()
+        }
+        None => String::new(),
+    };
+    let rest = match rest.as_object() {
+        Some(m) if m.is_empty() => String::new(),
+        _ => rest.to_string(),
+    };
+    format!("{:>9.1} s  {topic:<6} {what} {rest}", secs(v))
+        .trim_end()
+        .to_owned()
+}
+
+impl WatchView {
+    fn state_line(&self, v: &serde_json::Value) -> String {
+        let mission = &v["mission"];
+        let mut mode = short(mission);
+        if let Some(why) = mission["reason"].as_str() {
+            mode = format!("{mode} ({why})");
+        }
+        let task = match v["task"].as_array() {
+            Some(t) if t.len() == 2 => format!("task {} {}", t[0], short(&t[1])),
+            _ => "no task".to_owned(),
+        };
+        let pose = &v["pose"];
+        let f = |x: &serde_json::Value| x.as_f64().unwrap_or(f64::NAN);
+        let mut line = format!(
+            "{:>9.1} s  state  {mode} · {task} · {}  pose {:.2} {:.2} m {:.1}°  σ {:.1} cm  drive {:.2} m/s",
+            secs(v),
+            short(&v["behaviour"]),
+            f(&pose["x"]),
+            f(&pose["y"]),
+            f(&pose["theta"]).to_degrees(),
+            100.0 * f(&v["position_sigma_m"]),
+            f(&v["drive"]["speed_mps"]),
+        );
+        if let Some(d) = self.nearest_m {
+            line += &format!("  nearest {d:.2} m");
+        }
+        if !v["hazard"].is_null() {
+            line += &format!("  HOLD: {}", short(&v["hazard"]));
+        }
+        line
+    }
+
+    /// The map in one line, when it differs from the last one shown.
+    fn map_line(&mut self, v: &serde_json::Value) -> Option<String> {
+        let n = |k: &str| v[k].as_array().map_or(0, Vec::len);
+        let room = &v["room_m"];
+        let line = format!(
+            "map    room {:.2} × {:.2} m, {:.2} m high · doors {} · windows {} · on the floor {}",
+            room[0].as_f64().unwrap_or(f64::NAN),
+            room[1].as_f64().unwrap_or(f64::NAN),
+            v["height_m"].as_f64().unwrap_or(f64::NAN),
+            n("doors"),
+            n("windows"),
+            n("obstacles"),
+        );
+        // Sizes to the centimetre: a map line when something changed.
+        (line != self.map).then(|| {
+            self.map = line.clone();
+            format!("{:>9.1} s  {line}", secs(v))
+        })
+    }
+
+    /// The coverage in one line, when it differs from the last one shown.
+    fn coverage_line(&mut self, v: &serde_json::Value) -> Option<String> {
+        let surfaces: Vec<String> = v["surfaces"]
+            .as_array()
+            .map(|all| {
+                all.iter()
+                    .map(|c| {
+                        let planned = c["planned_spray_s"].as_f64().unwrap_or(0.0);
+                        let done = c["done_spray_s"].as_f64().unwrap_or(0.0);
+                        let pct = if planned > 0.0 {
+                            100.0 * done / planned
+                        } else {
+                            100.0
+                        };
+                        let name = match &c["surface"] {
+                            serde_json::Value::Object(m) => m
+                                .iter()
+                                .map(|(k, w)| format!("{k} {}", short(w)))
+                                .collect::<String>(),
+                            other => short(other),
+                        };
+                        format!("{name} {pct:.0}%")
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        let line = format!(
+            "coverage  station {}/{} · {}",
+            v["stations_done"],
+            v["stations"],
+            surfaces.join(" · ")
+        );
+        (line != self.coverage).then(|| {
+            self.coverage = line.clone();
+            line
+        })
     }
 }
 

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use stucco_core::{DriveCommand, Pose2, Stamp};
-use stucco_link::{Denial, LinkConfig, RobotLink};
+use stucco_link::{Denial, LinkConfig, RobotLink, ScanFrame};
 use stucco_mission::{BehaviourKind, Hazard, Inputs, MissionMode};
 use stucco_sim::Layout;
 
@@ -54,6 +54,11 @@ pub struct RobotState<'a> {
     pub drive: DriveCommand,
 }
 
+/// Control periods between two published scans (10 a second).
+const SCAN_EVERY: u64 = 5;
+/// Control periods in a second.
+const ONCE_A_SECOND: u64 = (1.0 / DT_S) as u64;
+
 /// How a robot's run ended.
 #[derive(Clone, Debug, Serialize)]
 pub struct RobotRun {
@@ -86,7 +91,9 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
     );
     let frame = RoomFrame::of(&Layout::of(&world), &start)?;
     let x0 = known.filter_start(&frame.to_room(&start));
-    let mut nav = Navigator::new(&world, mission.seed, x0, [known.room_sigma_m; 2])?;
+    let sprayer = mission.spray.as_ref().map(crate::plastering::sprayer_of);
+    let mut nav =
+        Navigator::with_sprayer(&world, mission.seed, x0, [known.room_sigma_m; 2], sprayer)?;
     nav.discover_doors(true);
     let mut exec = mission.executive(false);
     let session = stucco_link::open(&job.link).context("joining the zenoh network")?;
@@ -149,9 +156,25 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
             hazard: exec.hazard(),
             drive: out.drive,
         })?;
-        if step.is_multiple_of(50) {
-            link.heartbeat(now)?;
+        // Scans 10 a second; the map, the coverage and the heartbeat once.
+        if step.is_multiple_of(SCAN_EVERY) {
+            link.publish_scan(&ScanFrame {
+                stamp: now,
+                points: nav
+                    .obstacles()
+                    .iter()
+                    .map(|p| [p.x as f32, p.y as f32])
+                    .collect(),
+            })?;
         }
+        if step.is_multiple_of(ONCE_A_SECOND) {
+            link.heartbeat(now)?;
+            link.publish_map(&est)?;
+            if let Some(c) = exec.coverage() {
+                link.publish_coverage(&c)?;
+            }
+        }
+        nav.tool(out.tool);
         bumper = nav.drive(out.drive);
         step += 1;
         // Paced: simulated time runs `speed` times the wall clock. Until the

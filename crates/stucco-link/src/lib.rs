@@ -8,21 +8,30 @@
 //!   `failed` of an accepted command too);
 //! - `stucco/NAME/state`, `stucco/NAME/events`: the robot's state and its
 //!   executive's events, JSON;
+//! - `stucco/NAME/map`: what the robot has perceived, by the ids
+//!   telecommands name (walls, doors, windows, what stands on the floor,
+//!   the room's size), JSON, once a second;
+//! - `stucco/NAME/scan`: the latest laser scan's echoes in the robot's
+//!   frame, 10 a second, in the compact binary encoding of [`scan`];
+//! - `stucco/NAME/coverage`: the plastering task's progress over its plan,
+//!   surface by surface, JSON, once a second while it runs;
 //! - `stucco/NAME/heartbeat`: once a second;
 //! - `stucco/NAME/info`: a queryable answering the robot's name (for
 //!   `stucco op list`);
 //! - `stucco/NAME/operator`: the operators' heartbeats, which define the
 //!   link (its loss triggers the mission's link-loss policy).
 //!
-//! JSON throughout, so any zenoh client (Python, C, the zenoh CLI tools)
-//! can command and watch a robot.
+//! JSON for everything but scans, so any zenoh client (Python, C, the
+//! zenoh CLI tools) can command and watch a robot.
 //!
 //! What zenoh's access control refuses reaches the robot through
 //! [`audit`]: [`RobotLink::denials`].
 
 pub mod audit;
+pub mod scan;
 
 pub use audit::Denial;
+pub use scan::{ScanDecodeError, ScanFrame};
 use serde::Serialize;
 use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
@@ -92,6 +101,18 @@ pub mod keys {
     /// The executive's events.
     pub fn events(name: &str) -> String {
         format!("stucco/{name}/events")
+    }
+    /// What the robot has perceived.
+    pub fn map(name: &str) -> String {
+        format!("stucco/{name}/map")
+    }
+    /// The latest scan (binary, see [`crate::scan`]).
+    pub fn scan(name: &str) -> String {
+        format!("stucco/{name}/scan")
+    }
+    /// The plastering task's progress.
+    pub fn coverage(name: &str) -> String {
+        format!("stucco/{name}/coverage")
     }
     /// Once a second.
     pub fn heartbeat(name: &str) -> String {
@@ -174,6 +195,9 @@ pub struct RobotLink {
     acks: Publisher<'static>,
     state: Publisher<'static>,
     events: Publisher<'static>,
+    map: Publisher<'static>,
+    scan: Publisher<'static>,
+    coverage: Publisher<'static>,
     heartbeat: Publisher<'static>,
     operators: Subscriber<FifoChannelHandler<Sample>>,
     denials: Receiver<Denial>,
@@ -199,6 +223,15 @@ impl RobotLink {
             acks: publisher(keys::acks(name))?,
             state: publisher(keys::state(name))?,
             events: publisher(keys::events(name))?,
+            map: publisher(keys::map(name))?,
+            // Scans are many and soon stale: dropped rather than queued
+            // when the network is congested.
+            scan: session
+                .declare_publisher(keys::scan(name))
+                .congestion_control(zenoh::qos::CongestionControl::Drop)
+                .wait()
+                .map_err(z)?,
+            coverage: publisher(keys::coverage(name))?,
             heartbeat: publisher(keys::heartbeat(name))?,
             operators: session
                 .declare_subscriber(keys::operator(name))
@@ -300,6 +333,23 @@ impl RobotLink {
     pub fn publish_state(&self, state: &impl Serialize) -> Result<(), LinkError> {
         let json = serde_json::to_vec(state).map_err(z)?;
         self.state.put(json).wait().map_err(z)
+    }
+
+    /// Publishes what the robot has perceived.
+    pub fn publish_map(&self, map: &impl Serialize) -> Result<(), LinkError> {
+        let json = serde_json::to_vec(map).map_err(z)?;
+        self.map.put(json).wait().map_err(z)
+    }
+
+    /// Publishes a scan.
+    pub fn publish_scan(&self, scan: &ScanFrame) -> Result<(), LinkError> {
+        self.scan.put(scan.encode()).wait().map_err(z)
+    }
+
+    /// Publishes the plastering progress.
+    pub fn publish_coverage(&self, coverage: &impl Serialize) -> Result<(), LinkError> {
+        let json = serde_json::to_vec(coverage).map_err(z)?;
+        self.coverage.put(json).wait().map_err(z)
     }
 
     /// Publishes events.

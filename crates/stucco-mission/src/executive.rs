@@ -4,7 +4,7 @@
 
 use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
 use crate::model::{Estimate, WallGeometry, pose_at_wall};
-use crate::plaster::{Cursor, Phase, PlasterProgress, PlasterRun, plan_digest};
+use crate::plaster::{Cursor, Phase, PlasterCoverage, PlasterProgress, PlasterRun, plan_digest};
 use crate::supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor};
 use crate::task::{OnTimeout, TaskSpec, WallName};
 use nalgebra::Point2;
@@ -491,6 +491,12 @@ impl Executive {
             .as_ref()
             .and_then(|a| a.plaster.as_ref())
             .map(|r| &r.plan)
+    }
+
+    /// How far the `plaster` task under way has got over its plan.
+    pub fn coverage(&self) -> Option<PlasterCoverage> {
+        let a = self.active.as_ref()?;
+        a.plaster.as_ref().map(|r| r.coverage(a.index))
     }
 
     /// The progress to keep in a checkpoint: the mission file's tasks (the

@@ -42,6 +42,6 @@ pub use executive::{
     PARK_NOZZLE_M, Progress, ProgressMismatch, TaskStatus,
 };
 pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wall};
-pub use plaster::{Cursor, PlasterProgress, plan_digest};
+pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};
 pub use task::{OnTimeout, Side, TaskSpec, WallName};

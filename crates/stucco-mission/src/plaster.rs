@@ -43,6 +43,47 @@ pub struct PlasterProgress {
     pub plan_digest: String,
 }
 
+/// How far the `plaster` task under way has got over its plan, as the
+/// robot knows it: the plan's spraying time carried out, surface by
+/// surface (the coat itself is measured only in the simulator).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlasterCoverage {
+    /// The task's index among the mission's.
+    pub task: usize,
+    /// Stations done.
+    pub stations_done: usize,
+    /// Stations planned.
+    pub stations: usize,
+    /// Each planned surface's share done.
+    pub surfaces: Vec<SurfaceCoverage>,
+}
+
+/// One surface's share of a plan carried out.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceCoverage {
+    /// The surface.
+    pub surface: SurfaceId,
+    /// Spraying time planned on it, s.
+    pub planned_spray_s: f64,
+    /// Spraying time carried out, s.
+    pub done_spray_s: f64,
+    /// Plasterable area no station reaches, m² (reported, not sprayed).
+    pub unreachable_m2: f64,
+}
+
+impl SurfaceCoverage {
+    /// Share of the planned spraying done, % (100 when none is planned).
+    pub fn done_pct(&self) -> f64 {
+        if self.planned_spray_s > 0.0 {
+            100.0 * self.done_spray_s / self.planned_spray_s
+        } else {
+            100.0
+        }
+    }
+}
+
 /// What the nozzle does at a station.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Phase {
@@ -96,6 +137,61 @@ impl PlasterRun {
 }
 
 impl PlasterRun {
+    /// The plan's spraying carried out up to the cursor (and into its
+    /// move while spraying), surface by surface, as task `task`.
+    pub fn coverage(&self, task: usize) -> PlasterCoverage {
+        let mut surfaces: Vec<SurfaceCoverage> = self
+            .plan
+            .surfaces
+            .iter()
+            .map(|s| SurfaceCoverage {
+                surface: s.id,
+                planned_spray_s: 0.0,
+                done_spray_s: 0.0,
+                unreachable_m2: 0.0,
+            })
+            .collect();
+        fn entry(all: &mut [SurfaceCoverage], id: SurfaceId) -> Option<&mut SurfaceCoverage> {
+            all.iter_mut().find(|c| c.surface == id)
+        }
+        let in_move_s = match self.phase {
+            Phase::Spraying { in_move_s } => in_move_s,
+            _ => 0.0,
+        };
+        for (station, st) in self.plan.stations.iter().enumerate() {
+            for (pass, p) in st.passes.iter().enumerate() {
+                let Some(c) = entry(&mut surfaces, p.surface) else {
+                    continue;
+                };
+                for (step, m) in p.moves.iter().enumerate().filter(|(_, m)| m.spray) {
+                    let here = Cursor {
+                        station,
+                        pass,
+                        step,
+                    };
+                    let d = m.duration_s();
+                    c.planned_spray_s += d;
+                    c.done_spray_s += match here.cmp(&self.cursor) {
+                        std::cmp::Ordering::Less => d,
+                        std::cmp::Ordering::Equal => in_move_s.clamp(0.0, d),
+                        std::cmp::Ordering::Greater => 0.0,
+                    };
+                }
+            }
+        }
+        for u in &self.plan.unreachable {
+            if let Some(c) = entry(&mut surfaces, u.surface) {
+                c.unreachable_m2 += u.area_m2;
+            }
+        }
+        PlasterCoverage {
+            task,
+            stations_done: self.cursor.station.min(self.plan.stations.len()),
+            stations: self.plan.stations.len(),
+            surfaces,
+        }
+    }
+
     /// True when every move is done.
     pub fn finished(&self) -> bool {
         self.cursor.station >= self.plan.stations.len()

@@ -950,6 +950,20 @@ fn a_plaster_task_sprays_every_pass_and_resumes_mid_stroke() {
                 exec.plaster_plan().cloned().unwrap(),
                 robot.pose,
             ));
+            // The coverage it publishes: the spraying done so far, of the
+            // plan's, surface by surface.
+            let c = exec.coverage().unwrap();
+            let done: f64 = c.surfaces.iter().map(|s| s.done_spray_s).sum();
+            let planned: f64 = c.surfaces.iter().map(|s| s.planned_spray_s).sum();
+            let plan_s = exec.plaster_plan().unwrap().spray_s();
+            assert!((planned - plan_s).abs() < 1e-6, "{planned} {plan_s}");
+            // (ticks that end a move part-way count whole on the tool's
+            // side: a few ticks over ten minutes)
+            assert!(
+                (done - spraying_s).abs() < 1e-3 * spraying_s,
+                "{done} {spraying_s}"
+            );
+            assert!(c.stations_done < c.stations, "{c:?}");
         }
         robot.drive(out.drive);
         if exec.mode().is_final() {
