@@ -9,51 +9,19 @@ use std::time::Duration;
 use stucco_cli::{LinkConfig, Operator};
 use stucco_core::{Command, Reply};
 
-/// Robot `name`'s zenoh configuration: `transport` says how peers
-/// authenticate; subjects are matched by `subject_key` (`usernames` or
-/// `cert_common_names`): operators `ann`, viewers `vic`, everything else
-/// denied.
-fn robot_config(name: &str, transport: &str, subject_key: &str) -> String {
-    let watch = [
-        "state",
-        "events",
-        "acks",
-        "heartbeat",
-        "info",
-        "map",
-        "scan",
-        "coverage",
-    ]
-    .map(|k| format!("stucco/{name}/{k}"));
-    let watch = serde_json::to_string(&watch).unwrap();
-    format!(
-        r#"{{
-  mode: "peer",
-  transport: {transport},
-  access_control: {{
-    enabled: true,
-    default_permission: "deny",
-    rules: [
-      {{ id: "command", messages: ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
-                   "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"],
-         flows: ["ingress", "egress"], permission: "allow", key_exprs: ["stucco/{name}/**"] }},
-      {{ id: "watch", messages: ["put", "declare_subscriber", "query", "reply", "declare_queryable",
-                   "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"],
-         flows: ["ingress", "egress"], permission: "allow", key_exprs: {watch} }},
-      {{ id: "see-commands", messages: ["declare_queryable"], flows: ["egress"], permission: "allow",
-         key_exprs: ["stucco/{name}/cmd"] }},
-    ],
-    subjects: [
-      {{ id: "operators", {subject_key}: ["ann"] }},
-      {{ id: "viewers", {subject_key}: ["vic"] }},
-    ],
-    policies: [
-      {{ rules: ["command"], subjects: ["operators"] }},
-      {{ rules: ["watch", "see-commands"], subjects: ["viewers"] }},
-    ],
-  }},
-}}"#
-    )
+/// An example configuration shipped in `crates/stucco-link/config/`, with
+/// each `(from, to)` replaced (every `from` must be there: the test runs
+/// the file as users get it).
+fn shipped(file: &str, replace: &[(&str, &str)]) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../crates/stucco-link/config")
+        .join(file);
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    for (from, to) in replace {
+        assert!(text.contains(from), "{file} has no {from}");
+        text = text.replace(from, to);
+    }
+    text
 }
 
 /// How the peers of one scenario join.
@@ -73,7 +41,9 @@ struct Site<'a> {
 
 impl Site<'_> {
     fn join(&self, credentials: &str, identity: &str) -> anyhow::Result<Operator> {
-        let cfg = self.dir.join(format!("{credentials}.json5"));
+        let cfg = self
+            .dir
+            .join(format!("{}.json5", credentials.replace([':', '/'], "_")));
         std::fs::write(&cfg, (self.peer)(credentials)).unwrap();
         let link = LinkConfig {
             connect: vec![self.connect.clone()],
@@ -83,9 +53,10 @@ impl Site<'_> {
         Operator::connect(&link, identity)
     }
 
-    /// The operator commands, the viewer watches and is refused (and
+    /// The operator (`ann`) commands, the viewer (`vic`) watches and is
+    /// refused (and
     /// named in the robot's log), each of `outsiders` reaches nothing.
-    fn check(&self, outsiders: &[&str]) {
+    fn check(&self, [operator, viewer]: [&str; 2], outsiders: &[&str]) {
         let name = self.name;
         let robot = crate::RunningRobot::start(
             name,
@@ -96,8 +67,8 @@ impl Site<'_> {
             },
             10.0,
         );
-        let mut ann = self.join("ann", "ann").unwrap();
-        let mut vic = self.join("vic", "vic").unwrap();
+        let mut ann = self.join(operator, "ann").unwrap();
+        let mut vic = self.join(viewer, "vic").unwrap();
         // The viewer watches the robot...
         assert!(vic.state(name, Duration::from_secs(3)).is_ok());
         // ...but none of its commands reaches it: no reply, nothing done.
@@ -156,25 +127,29 @@ fn only_operators_may_command_viewers_may_watch() {
     let dictionary = dir.path().join("users.txt");
     std::fs::write(
         &dictionary,
-        "ann:ann-secret\nvic:vic-secret\nr1:robot-secret\n",
+        "ann:change-me-too\nvic:vic-secret\nr1:change-me\n",
     )
     .unwrap();
     let robot = dir.path().join("robot.json5");
-    let transport = format!(
-        r#"{{ auth: {{ usrpwd: {{ user: "r1", password: "robot-secret", dictionary_file: "{}" }} }} }}"#,
-        dictionary.display()
-    );
-    std::fs::write(&robot, robot_config("r1", &transport, "usernames")).unwrap();
+    let dict = dictionary.display().to_string();
+    std::fs::write(
+        &robot,
+        shipped("robot.json5", &[("/etc/stucco/users.txt", &dict)]),
+    )
+    .unwrap();
     let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
-    // Credentials are `user` (the right password) or `user:password`.
+    // Credentials are `user:password`.
     let peer = |credentials: &str| {
-        let (user, password) = credentials
-            .split_once(':')
-            .map_or((credentials, format!("{credentials}-secret")), |(u, p)| {
-                (u, p.to_owned())
-            });
-        format!(
-            r#"{{ mode: "peer", transport: {{ auth: {{ usrpwd: {{ user: "{user}", password: "{password}" }} }} }} }}"#
+        let (user, password) = credentials.split_once(':').unwrap();
+        shipped(
+            "operator.json5",
+            &[
+                ("user: \"ann\"", &format!("user: \"{user}\"")),
+                (
+                    "password: \"change-me-too\"",
+                    &format!("password: \"{password}\""),
+                ),
+            ],
         )
     };
     Site {
@@ -186,7 +161,7 @@ fn only_operators_may_command_viewers_may_watch() {
         peer: &peer,
         subject: &|user| format!("Username({user})"),
     }
-    .check(&["ann:guess"]);
+    .check(["ann:change-me-too", "vic:vic-secret"], &["ann:guess"]);
 }
 
 /// A certificate authority and the certificates it signs, as PEM files.
@@ -236,17 +211,6 @@ impl Authority {
     }
 }
 
-/// The TLS settings of a peer holding `cert`/`key`, trusting `root`, with
-/// mutual authentication.
-fn tls(root: &Path, cert: &Path, key: &Path) -> String {
-    let (root, cert, key) = (root.display(), cert.display(), key.display());
-    format!(
-        r#"{{ link: {{ tls: {{ root_ca_certificate: "{root}", enable_mtls: true,
-            listen_certificate: "{cert}", listen_private_key: "{key}",
-            connect_certificate: "{cert}", connect_private_key: "{key}" }} }} }}"#
-    )
-}
-
 /// A TCP port free a moment ago (TLS runs over TCP; never a fixed port).
 fn free_port() -> u16 {
     let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
@@ -258,31 +222,54 @@ fn with_tls_certificates_only_operators_may_command() {
     let dir = tempfile::tempdir().unwrap();
     let site = Authority::new(dir.path(), "site-ca");
     let stranger = Authority::new(dir.path(), "stranger-ca");
+    let root = site.root().display().to_string();
     let (cert, key) = site.sign("r2");
     let robot = dir.path().join("robot.json5");
     std::fs::write(
         &robot,
-        robot_config("r2", &tls(&site.root(), &cert, &key), "cert_common_names"),
+        shipped(
+            "robot-tls.json5",
+            &[
+                ("/etc/stucco/tls/site-ca.pem", &root),
+                ("/etc/stucco/tls/r1.pem", &cert.display().to_string()),
+                ("/etc/stucco/tls/r1.key", &key.display().to_string()),
+                // This test's robot is r2 (r1 is another test's, in the
+                // same process).
+                ("stucco/r1/", "stucco/r2/"),
+            ],
+        ),
     )
     .unwrap();
     // Credentials: a common name signed by the site's authority,
     // `stranger:CN` signed by another one, or none at all.
     let peer = |credentials: &str| {
-        if credentials == "no-certificate" {
-            let root = site.root();
-            return format!(
-                r#"{{ mode: "peer", transport: {{ link: {{ tls: {{ root_ca_certificate: "{}" }} }} }} }}"#,
-                root.display()
-            );
-        }
         let (ca, cn) = match credentials.split_once(':') {
             Some((_, cn)) => (&stranger, cn),
             None => (&site, credentials),
         };
         let (cert, key) = ca.sign(cn);
-        format!(
-            r#"{{ mode: "peer", transport: {} }}"#,
-            tls(&site.root(), &cert, &key)
+        let (cert, key) = (cert.display().to_string(), key.display().to_string());
+        let (cert_line, key_line) = if credentials == "no-certificate" {
+            (String::new(), String::new())
+        } else {
+            (
+                format!("connect_certificate: \"{cert}\","),
+                format!("connect_private_key: \"{key}\","),
+            )
+        };
+        shipped(
+            "operator-tls.json5",
+            &[
+                ("/etc/stucco/tls/site-ca.pem", &root),
+                (
+                    "connect_certificate: \"/home/ann/.stucco/ann.pem\",",
+                    &cert_line,
+                ),
+                (
+                    "connect_private_key: \"/home/ann/.stucco/ann.key\",",
+                    &key_line,
+                ),
+            ],
         )
     };
     let port = free_port();
@@ -295,5 +282,5 @@ fn with_tls_certificates_only_operators_may_command() {
         peer: &peer,
         subject: &|cn| format!("CertCommonName({cn})"),
     }
-    .check(&["stranger:ann", "no-certificate"]);
+    .check(["ann", "vic"], &["stranger:ann", "no-certificate"]);
 }

@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 use stucco_cli::{LinkConfig, Operator};
-use stucco_core::{Command, Reply};
+use stucco_core::{Command, Reply, Side, SurfaceName, WallName};
 
 /// Robot `r1` standing by on a Unix socket in `dir`, and the link
 /// configuration of a peer connecting to it.
@@ -247,8 +247,11 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     .unwrap();
     // In an order whose outcome is known: standing by, paused and resumed,
     // a door it does not know, a jog, the wait answered (the mission is
-    // done, so skip is refused), a move and a room map reopen it, stop
-    // pauses the map, abort ends it.
+    // done, so skip is refused), a move reopens it, a wall to follow and an
+    // alignment refused (the operator typed a standoff of -1 m), a room map,
+    // plastering refused (this robot carries no spray tool), stop pauses
+    // what runs, abort ends it. (Tasks that start and then fail are the
+    // executive's tests': here a failed task would end the mission.)
     let vocabulary = [
         Command::Status,
         Command::Pause,
@@ -266,14 +269,33 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
             dy_m: 0.0,
             dtheta_deg: 0.0,
         },
+        Command::FollowWall {
+            wall: WallName::South,
+            standoff_m: -1.0,
+            from_m: 2.6,
+            to_m: 3.6,
+        },
+        Command::AlignToWall {
+            wall: WallName::South,
+            standoff_m: -1.0,
+            at_m: 3.4,
+            side: Side::Left,
+        },
         Command::MapRoom,
+        Command::PlasterSurface {
+            surface: SurfaceName::Ceiling,
+        },
         Command::Stop,
         Command::Abort,
     ];
+    let mut refusals = Vec::new();
     for command in vocabulary {
         let r = op.send("faulty", command.clone(), 20.0, None).unwrap();
         match &r.ack.reply {
-            Reply::Rejected { reason } => assert!(!reason.is_empty()),
+            Reply::Rejected { reason } => {
+                assert!(!reason.is_empty());
+                refusals.push(reason.clone());
+            }
             Reply::Failed { .. } => panic!("{command:?}: {:?}", r.ack),
             _ => {}
         }
@@ -298,6 +320,18 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     // resumed once, abort ended it once.
     assert_eq!(count("started move_relative"), 1, "{kinds:?}");
     assert_eq!(count("started map_room"), 1, "{kinds:?}");
+    // Refused, each with its reason: the door, skip, the two standoffs,
+    // the spray tool.
+    assert_eq!(refusals.len(), 5, "{refusals:?}");
+    assert_eq!(
+        refusals.iter().filter(|r| r.contains("standoff_m")).count(),
+        2,
+        "{refusals:?}"
+    );
+    assert!(refusals.iter().any(|r| r.contains("spray")), "{refusals:?}");
+    for refused in ["follow_wall", "align_to_wall", "plaster"] {
+        assert_eq!(count(&format!("started {refused}")), 0, "{kinds:?}");
+    }
     assert_eq!(count("paused"), 2, "{kinds:?}");
     assert_eq!(count("resumed"), 1, "{kinds:?}");
     assert_eq!(count("aborted"), 1, "{kinds:?}");

@@ -14,7 +14,7 @@ use stucco_cli::{
 };
 use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
 use stucco_cli::{LogReplayJob, OdomNoise, OdometrySource, Reference, run_log_replay};
-use stucco_core::{Command as Tc, Reply, Side, WallName};
+use stucco_core::{Command as Tc, Reply, Side, SurfaceName, WallName};
 use stucco_link::Mode;
 
 /// stucco: software of an autonomous spray-plastering robot.
@@ -225,6 +225,13 @@ enum OpAction {
     Continue,
     /// Map the room.
     MapRoom,
+    /// Plaster one surface of the room, whole (the robot surveys, plans
+    /// and sprays with the mission's spray tool).
+    Plaster {
+        /// The surface: west, south, east, north (walls) or ceiling.
+        #[arg(long, value_parser = parse_surface)]
+        surface: SurfaceName,
+    },
     /// Drive through a door the robot knows.
     PassDoor {
         /// The door's index.
@@ -301,6 +308,15 @@ enum OpAction {
     },
 }
 
+fn parse_surface(s: &str) -> Result<SurfaceName, String> {
+    match s {
+        "ceiling" => Ok(SurfaceName::Ceiling),
+        wall => parse_wall(wall)
+            .map(SurfaceName::Wall)
+            .map_err(|_| format!("{s}: one of west, south, east, north, ceiling")),
+    }
+}
+
 fn parse_wall(s: &str) -> Result<WallName, String> {
     serde_json::from_value(serde_json::Value::String(s.to_owned()))
         .map_err(|_| format!("{s}: one of west, south, east, north"))
@@ -365,6 +381,7 @@ fn op(
         OpAction::Skip => Tc::Skip,
         OpAction::Continue => Tc::Continue,
         OpAction::MapRoom => Tc::MapRoom,
+        OpAction::Plaster { surface } => Tc::PlasterSurface { surface },
         OpAction::PassDoor { door } => Tc::PassDoor { door },
         OpAction::Move { dx, dy, dtheta } => Tc::MoveRelative {
             dx_m: dx,

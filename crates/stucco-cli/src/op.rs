@@ -398,11 +398,7 @@ impl WatchView {
                     .map(|c| {
                         let planned = c["planned_spray_s"].as_f64().unwrap_or(0.0);
                         let done = c["done_spray_s"].as_f64().unwrap_or(0.0);
-                        let pct = if planned > 0.0 {
-                            100.0 * done / planned
-                        } else {
-                            100.0
-                        };
+                        let unreachable = c["unreachable_m2"].as_f64().unwrap_or(0.0);
                         let name = match &c["surface"] {
                             serde_json::Value::Object(m) => m
                                 .iter()
@@ -410,7 +406,15 @@ impl WatchView {
                                 .collect::<String>(),
                             other => short(other),
                         };
-                        format!("{name} {pct:.0}%")
+                        let mut part = if planned > 0.0 {
+                            format!("{name} {:.0}%", 100.0 * done / planned)
+                        } else {
+                            format!("{name} nothing planned")
+                        };
+                        if unreachable > 0.0 {
+                            part += &format!(" ({unreachable:.2} m² out of reach)");
+                        }
+                        part
                     })
                     .collect()
             })
@@ -441,5 +445,48 @@ impl EventFeed {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use stucco_mission::{PlasterCoverage, SurfaceCoverage, WallName};
+    use stucco_plan::SurfaceId;
+
+    #[test]
+    fn coverage_reads_as_a_line_shown_when_it_moves_on() {
+        let mut c = PlasterCoverage {
+            task: 2,
+            stations_done: 3,
+            stations: 14,
+            surfaces: vec![
+                SurfaceCoverage {
+                    surface: SurfaceId::Wall(WallName::South),
+                    planned_spray_s: 200.0,
+                    done_spray_s: 50.0,
+                    unreachable_m2: 0.0,
+                },
+                SurfaceCoverage {
+                    surface: SurfaceId::Ceiling,
+                    planned_spray_s: 0.0,
+                    done_spray_s: 0.0,
+                    unreachable_m2: 0.4,
+                },
+            ],
+        };
+        let mut view = WatchView::default();
+        let v = serde_json::to_value(&c).unwrap();
+        assert_eq!(
+            view.coverage_line(&v).as_deref(),
+            Some(
+                "coverage  station 3/14 · wall south 25% · ceiling nothing planned (0.40 m² out of reach)"
+            )
+        );
+        assert_eq!(view.coverage_line(&v), None);
+        c.surfaces[0].done_spray_s = 60.0;
+        let v = serde_json::to_value(&c).unwrap();
+        assert!(view.coverage_line(&v).unwrap().contains("wall south 30%"));
     }
 }

@@ -140,8 +140,26 @@ pub enum Command {
         /// How long the command holds, s.
         ttl_s: f64,
     },
+    /// Plaster one surface of the room the robot is in, whole: the robot
+    /// surveys the room, plans on what it finds and sprays (the mission's
+    /// spray tool and settings).
+    PlasterSurface {
+        /// The surface, as `map` and `coverage` name it.
+        surface: SurfaceName,
+    },
     /// A harmless query: replied to at once.
     Status,
+}
+
+/// A surface of a room: a wall or the ceiling (`{"wall": "south"}`,
+/// `"ceiling"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceName {
+    /// A wall.
+    Wall(WallName),
+    /// The ceiling.
+    Ceiling,
 }
 
 /// The robot's reply to a telecommand.

@@ -1,7 +1,9 @@
 //! What the robot's telemetry costs: one state message serialised and
-//! published to an operator's session watching it (over a Unix socket),
-//! and one telecommand's round trip to its reply. At 50 states a second
-//! the first, times 50, is the share of one core telemetry takes; run with
+//! published to an operator's session watching it (over a Unix socket);
+//! one 450-echo scan; one second of everything the robot publishes (50
+//! states, 10 scans, the map and the heartbeat: its time over a second is
+//! the share of one core telemetry takes); and one telecommand's round
+//! trip to its reply. Run with
 //! `cargo bench -p stucco-link --bench telemetry -- --noplot`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -9,7 +11,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use serde::Serialize;
 use std::time::{Duration, Instant};
 use stucco_core::{Ack, Command, Pose2, Reply, Stamp, Telecommand};
-use stucco_link::{LinkConfig, OperatorClient, RobotLink, keys, open};
+use stucco_link::{LinkConfig, OperatorClient, RobotLink, ScanFrame, keys, open};
 
 /// A state as large as the robot's.
 #[derive(Serialize)]
@@ -39,6 +41,16 @@ fn telemetry(c: &mut Criterion) {
     .unwrap();
     let op = OperatorClient::new(op_session);
     let watch = op.watch(keys::state("r1")).unwrap();
+    let others: Vec<_> = [keys::scan("r1"), keys::map("r1"), keys::heartbeat("r1")]
+        .into_iter()
+        .map(|k| op.watch(k).unwrap())
+        .collect();
+    let drain = || {
+        while let Ok(Some(_)) = watch.try_recv() {}
+        for w in &others {
+            while let Ok(Some(_)) = w.try_recv() {}
+        }
+    };
     std::thread::sleep(Duration::from_millis(300));
     let state = State {
         stamp: Stamp::from_secs_f64(12.34),
@@ -55,6 +67,50 @@ fn telemetry(c: &mut Criterion) {
             robot.publish_state(&state).unwrap();
             // Keep the watcher's queue drained, as a console would.
             while let Ok(Some(_)) = watch.try_recv() {}
+        });
+    });
+    // A room's scan: 450 echoes.
+    let scan = ScanFrame {
+        stamp: Stamp::from_secs_f64(12.34),
+        points: (0..450)
+            .map(|i| {
+                let a = (-135.0 + 0.6 * f64::from(i)).to_radians();
+                let r = (2.5 / a.cos().abs()).min(1.5 / a.sin().abs());
+                [(r * a.cos()) as f32, (r * a.sin()) as f32]
+            })
+            .collect(),
+    };
+    g.bench_function("publish_scan", |b| {
+        b.iter(|| {
+            robot.publish_scan(&scan).unwrap();
+            drain();
+        });
+    });
+    // A map as large as a furnished room's: doors, a window, furniture.
+    let map = serde_json::json!({
+        "stamp": 12_340_000_000i64,
+        "pose": {"x": 2.5, "y": 0.6, "theta": 3.1},
+        "position_sigma_m": 0.004, "heading_sigma_rad": 0.002,
+        "room_m": [5.01, 2.85], "room_sigma_m": [0.003, 0.004],
+        "walls_seen": [120, 340, 95, 410],
+        "doors": [{"wall": "north", "position_m": 0.9, "width_m": 0.86, "sigma_m": 0.01},
+                  {"wall": "east", "position_m": 1.2, "width_m": null, "sigma_m": 0.03}],
+        "height_m": 2.6,
+        "windows": [{"wall": "south", "along_m": [1.8, 3.2], "sill_head_m": [0.9, 2.1]}],
+        "obstacles": [{"min": [0.2, 0.3], "max": [1.1, 0.9], "height_m": 1.0},
+                      {"min": [3.0, 1.0], "max": [4.2, 1.8], "height_m": 1.0}],
+    });
+    g.bench_function("one_second", |b| {
+        b.iter(|| {
+            for k in 0..50 {
+                robot.publish_state(&state).unwrap();
+                if k % 5 == 0 {
+                    robot.publish_scan(&scan).unwrap();
+                }
+            }
+            robot.publish_map(&map).unwrap();
+            robot.heartbeat(Stamp::ZERO).unwrap();
+            drain();
         });
     });
     g.finish();

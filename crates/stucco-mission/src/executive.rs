@@ -844,6 +844,11 @@ impl Executive {
                 reason: format!("{key}: {why}"),
             };
         }
+        if matches!(spec, TaskSpec::Plaster { .. }) && self.config.spray.is_none() {
+            return Reply::Rejected {
+                reason: "this robot carries no spray tool (the mission has no [spray])".to_owned(),
+            };
+        }
         if let TaskSpec::PassDoor { door, .. } = spec
             && door >= est.doors.len()
         {

@@ -264,6 +264,17 @@ impl TaskSpec {
                 side,
                 speed_mps: drive_speed(),
             },
+            C::PlasterSurface { surface } => TaskSpec::Plaster {
+                walls: match surface {
+                    stucco_core::SurfaceName::Wall(w) => vec![w],
+                    stucco_core::SurfaceName::Ceiling => Vec::new(),
+                },
+                ceiling: surface == stucco_core::SurfaceName::Ceiling,
+                speed_mps: follow_speed(),
+                settle_s: settle(),
+                survey: true,
+                survey_speed_mps: survey_loop_speed(),
+            },
             _ => return None,
         })
     }

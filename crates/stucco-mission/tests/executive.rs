@@ -8,7 +8,8 @@ use nalgebra::Point2;
 use std::collections::BTreeMap;
 use stucco_control::{GainSchedule, Limiter};
 use stucco_core::{
-    Ack, Command, DriveCommand, Pose2, Reply, Stamp, Telecommand, Twist2, VehicleSpec, wrap_angle,
+    Ack, Command, DriveCommand, Pose2, Reply, Stamp, SurfaceName, Telecommand, Twist2, VehicleSpec,
+    wrap_angle,
 };
 use stucco_mission::*;
 
@@ -587,6 +588,69 @@ fn a_task_from_the_operator_is_accepted_then_done() {
     assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
     // The checkpoint keeps the mission file's task only.
     assert_eq!(exec.progress().tasks, ["wait_for_operator"]);
+}
+
+/// `plaster_surface` from the operator: refused by a robot without a spray
+/// tool; with one, the south wall alone is planned and sprayed, then done.
+#[test]
+fn the_operator_has_one_surface_plastered() {
+    let south = Command::PlasterSurface {
+        surface: SurfaceName::Wall(WallName::South),
+    };
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let mut bare = standing_by();
+    tick_with(&mut bare, &mut robot, &[]);
+    let out = tick_with(
+        &mut bare,
+        &mut robot,
+        &[command("p0", Stamp::ZERO, south.clone())],
+    );
+    assert!(
+        matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains("spray")),
+        "{:?}",
+        out.acks
+    );
+    let mut exec = Executive::new(
+        ExecutiveConfig {
+            vehicle: VehicleSpec::default(),
+            gains: GainSchedule::default(),
+            safety: SafetyConfig::default(),
+            unattended: false,
+            spray: Some(stucco_plan::SprayTool::default()),
+        },
+        vec![TaskSpec::WaitForOperator {
+            prompt: "standing by".to_owned(),
+            timeout_s: None,
+            on_timeout: OnTimeout::Fail,
+        }],
+    );
+    tick_with(&mut exec, &mut robot, &[]);
+    let p1 = command("p1", robot.now, south);
+    let first = tick_with(&mut exec, &mut robot, &[p1]);
+    assert_eq!(first.acks[0].reply, Reply::Accepted);
+    let (mut done, mut passes, mut surfaces) = (None, 0, std::collections::BTreeSet::new());
+    for _ in 0..(3000.0 / DT) as usize {
+        let out = tick_with(&mut exec, &mut robot, &[]);
+        passes += out
+            .events
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::PassDone { .. }))
+            .count();
+        if let Some(plan) = exec.plaster_plan() {
+            surfaces.extend(plan.passes().map(|(_, p)| format!("{:?}", p.surface)));
+        }
+        if let Some(a) = out.acks.iter().find(|a| a.id == "p1") {
+            done = Some(a.reply.clone());
+            break;
+        }
+    }
+    assert_eq!(done, Some(Reply::Done), "{:?}", exec.status());
+    assert_eq!(
+        surfaces.into_iter().collect::<Vec<_>>(),
+        ["Wall(South)"],
+        "planned on other surfaces"
+    );
+    assert!(passes > 0);
 }
 
 #[test]
