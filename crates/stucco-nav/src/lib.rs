@@ -45,6 +45,7 @@
 #![warn(missing_docs)]
 
 mod association;
+mod calibration;
 mod door;
 mod error;
 mod extractor;
@@ -64,6 +65,7 @@ mod wall;
 mod wall_map;
 mod windows;
 
+pub use calibration::{Calibration, CalibratorConfig, OnlineCalibrator};
 pub use door::{DoorConfig, DoorOpening, find_doors, find_doors_moving};
 pub use error::NavError;
 pub use extractor::WallExtractor;
