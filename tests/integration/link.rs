@@ -25,6 +25,20 @@ fn robot_on_socket(dir: &std::path::Path, speed: f64) -> (crate::RunningRobot, L
     (robot, peer)
 }
 
+/// `robot` moves `dx_m` forward on `op`'s command: accepted, then done.
+fn forward_done(op: &mut Operator, robot: &str, dx_m: f64) {
+    let command = Command::MoveRelative {
+        dx_m,
+        dy_m: 0.0,
+        dtheta_deg: 0.0,
+    };
+    let r = op
+        .send(robot, command, 10.0, Some(Duration::from_secs(30)))
+        .unwrap();
+    assert_eq!(r.ack.reply, Reply::Accepted);
+    assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done));
+}
+
 #[test]
 fn an_operator_commands_a_robot_over_zenoh() {
     let dir = tempfile::tempdir().unwrap();
@@ -114,19 +128,7 @@ fn an_operator_watches_a_robot() {
     let (person, program) = (watcher(false), watcher(true));
     std::thread::sleep(Duration::from_millis(500));
     let mut op = Operator::connect(&peer, "ann").unwrap();
-    let r = op
-        .send(
-            "r1",
-            Command::MoveRelative {
-                dx_m: 0.3,
-                dy_m: 0.0,
-                dtheta_deg: 0.0,
-            },
-            10.0,
-            Some(Duration::from_secs(30)),
-        )
-        .unwrap();
-    assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done));
+    forward_done(&mut op, "r1", 0.3);
     let person = person.join().unwrap();
     let text = person.join("\n");
     let has = |needle: &str| person.iter().any(|l| l.contains(needle));
@@ -187,19 +189,7 @@ fn two_robots_and_an_operator_through_a_router() {
         let r = op.send(name, Command::Status, 10.0, None).unwrap();
         assert_eq!(r.ack.reply, Reply::Done, "{name}");
     }
-    let r = op
-        .send(
-            "r2",
-            Command::MoveRelative {
-                dx_m: 0.3,
-                dy_m: 0.0,
-                dtheta_deg: 0.0,
-            },
-            10.0,
-            Some(Duration::from_secs(30)),
-        )
-        .unwrap();
-    assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done));
+    forward_done(&mut op, "r2", 0.3);
     for r in robots {
         r.stop();
     }
