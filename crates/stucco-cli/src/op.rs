@@ -7,6 +7,8 @@ use serde::Serialize;
 use std::time::{Duration, Instant};
 use stucco_core::{Ack, Command, Reply, Stamp, Telecommand};
 use stucco_link::{LinkConfig, OperatorClient, ScanFrame, keys, parse};
+use stucco_mission::{Estimate, PlasterCoverage};
+use stucco_plan::SurfaceId;
 
 /// Retry period of an unanswered command.
 const RETRY: Duration = Duration::from_millis(500);
@@ -311,20 +313,22 @@ fn short(v: &serde_json::Value) -> String {
     }
 }
 
-/// An event or a reply: when, what, and its other fields.
+/// An event or a reply: when, what, and its other fields (a reply's
+/// reason among them).
 fn tagged_line(topic: &str, v: &serde_json::Value) -> String {
     let mut rest = v.clone();
     let what = match rest.as_object_mut() {
         Some(m) => {
             m.remove("stamp");
-            let tag = m
-                .remove("event")
-                .or_else(|| m.remove("reply"))
-                .map(|t| short(&t));
-            if let Some(serde_json::Value::Object(r)) = m.get("reply").cloned() {
-                m.extend(r);
+            if let Some(tag) = m.remove("event") {
+                short(&tag)
+            } else if let Some(serde_json::Value::Object(mut reply)) = m.remove("reply") {
+                let tag = reply.remove("reply").map(|t| short(&t)).unwrap_or_default();
+                m.extend(reply);
+                tag
+            } else {
+                String::new()
             }
-            tag.unwrap_or_default()
         }
         None => String::new(),
     };
@@ -371,58 +375,49 @@ impl WatchView {
 
     /// The map in one line, when it differs from the last one shown.
     fn map_line(&mut self, v: &serde_json::Value) -> Option<String> {
-        let n = |k: &str| v[k].as_array().map_or(0, Vec::len);
-        let room = &v["room_m"];
+        let map: Estimate = serde_json::from_value(v.clone()).ok()?;
         let line = format!(
             "map    room {:.2} × {:.2} m, {:.2} m high · doors {} · windows {} · on the floor {}",
-            room[0].as_f64().unwrap_or(f64::NAN),
-            room[1].as_f64().unwrap_or(f64::NAN),
-            v["height_m"].as_f64().unwrap_or(f64::NAN),
-            n("doors"),
-            n("windows"),
-            n("obstacles"),
+            map.room_m[0],
+            map.room_m[1],
+            map.height_m,
+            map.doors.len(),
+            map.windows.len(),
+            map.obstacles.len(),
         );
         // Sizes to the centimetre: a map line when something changed.
         (line != self.map).then(|| {
             self.map = line.clone();
-            format!("{:>9.1} s  {line}", secs(v))
+            format!("{:>9.1} s  {line}", map.stamp.as_secs_f64())
         })
     }
 
     /// The coverage in one line, when it differs from the last one shown.
     fn coverage_line(&mut self, v: &serde_json::Value) -> Option<String> {
-        let surfaces: Vec<String> = v["surfaces"]
-            .as_array()
-            .map(|all| {
-                all.iter()
-                    .map(|c| {
-                        let planned = c["planned_spray_s"].as_f64().unwrap_or(0.0);
-                        let done = c["done_spray_s"].as_f64().unwrap_or(0.0);
-                        let unreachable = c["unreachable_m2"].as_f64().unwrap_or(0.0);
-                        let name = match &c["surface"] {
-                            serde_json::Value::Object(m) => m
-                                .iter()
-                                .map(|(k, w)| format!("{k} {}", short(w)))
-                                .collect::<String>(),
-                            other => short(other),
-                        };
-                        let mut part = if planned > 0.0 {
-                            format!("{name} {:.0}%", 100.0 * done / planned)
-                        } else {
-                            format!("{name} nothing planned")
-                        };
-                        if unreachable > 0.0 {
-                            part += &format!(" ({unreachable:.2} m² out of reach)");
-                        }
-                        part
-                    })
-                    .collect()
+        let c: PlasterCoverage = serde_json::from_value(v.clone()).ok()?;
+        let surfaces: Vec<String> = c
+            .surfaces
+            .iter()
+            .map(|s| {
+                let name = match s.surface {
+                    SurfaceId::Wall(w) => format!("wall {}", short(&serde_json::json!(w))),
+                    SurfaceId::Ceiling => "ceiling".to_owned(),
+                };
+                let mut part = if s.planned_spray_s > 0.0 {
+                    format!("{name} {:.0}%", s.done_pct())
+                } else {
+                    format!("{name} nothing planned")
+                };
+                if s.unreachable_m2 > 0.0 {
+                    part += &format!(" ({:.2} m² out of reach)", s.unreachable_m2);
+                }
+                part
             })
-            .unwrap_or_default();
+            .collect();
         let line = format!(
             "coverage  station {}/{} · {}",
-            v["stations_done"],
-            v["stations"],
+            c.stations_done,
+            c.stations,
             surfaces.join(" · ")
         );
         (line != self.coverage).then(|| {
@@ -452,8 +447,7 @@ impl EventFeed {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use stucco_mission::{PlasterCoverage, SurfaceCoverage, WallName};
-    use stucco_plan::SurfaceId;
+    use stucco_mission::{SurfaceCoverage, WallName};
 
     #[test]
     fn coverage_reads_as_a_line_shown_when_it_moves_on() {
@@ -488,5 +482,20 @@ mod tests {
         c.surfaces[0].done_spray_s = 60.0;
         let v = serde_json::to_value(&c).unwrap();
         assert!(view.coverage_line(&v).unwrap().contains("wall south 30%"));
+    }
+
+    #[test]
+    fn a_refusal_reads_with_its_reason() {
+        let ack = stucco_core::Ack {
+            id: "c1".to_owned(),
+            stamp: Stamp::from_secs_f64(12.5),
+            reply: Reply::Rejected {
+                reason: "door 7 is not known (1 found)".to_owned(),
+            },
+        };
+        let line = tagged_line("reply", &serde_json::to_value(&ack).unwrap());
+        assert!(line.contains("reply  rejected"), "{line}");
+        assert!(line.contains("door 7 is not known"), "{line}");
+        assert!(line.contains("\"id\":\"c1\""), "{line}");
     }
 }
