@@ -85,6 +85,10 @@ pub struct CalibratorConfig {
     pub gate_chi2: f64,
     /// Fewest measurements a wall must rest on to be used.
     pub min_points: usize,
+    /// σ added to a wall's predicted distance (m) and direction (rad) when
+    /// pairing it with the next scan's walls: the calibration may still be
+    /// far off, and the walls of a room are metres and 90° apart.
+    pub association_slack: [f64; 2],
 }
 
 impl Default for CalibratorConfig {
@@ -96,6 +100,7 @@ impl Default for CalibratorConfig {
             min_sigma_gamma_rad: 0.05f64.to_radians(),
             gate_chi2: 9.21,
             min_points: 20,
+            association_slack: [0.05, 2f64.to_radians()],
         }
     }
 }
@@ -166,9 +171,11 @@ impl OnlineCalibrator {
             .collect();
         let before = std::mem::take(&mut self.last);
         let steps = std::mem::take(&mut self.steps);
-        let pairs = self.associate(&before, &now, &steps);
+        // The motion under the calibration as it stands, for both.
+        let (t, q) = self.motion(&self.x, &steps);
+        let pairs = self.associate(&before, &now, &t);
         let n = pairs.len();
-        self.correct(&pairs, &steps);
+        self.correct(&pairs, &steps, &t, &q);
         self.used += n;
         self.last = now;
         n
@@ -205,30 +212,20 @@ impl OnlineCalibrator {
 
     /// Each wall of the first scan with the one wall of the second within
     /// the gate (none when two are).
-    fn associate<'a>(
-        &self,
-        before: &'a [Wall],
-        after: &'a [Wall],
-        steps: &[[f64; 2]],
-    ) -> Vec<Pair<'a>> {
-        let (t, _) = self.motion(&self.x, steps);
+    fn associate<'a>(&self, before: &'a [Wall], after: &'a [Wall], t: &Pose2) -> Vec<Pair<'a>> {
         let m = Pose2::new(self.x[0], self.x[1], self.x[2]);
+        let [slack_d, slack_g] = self.config.association_slack;
+        let slack = Matrix2::from_diagonal(&Vector2::new(slack_d.powi(2), slack_g.powi(2)));
         let mut out = Vec::new();
         for b in before {
-            let predicted = Self::moved(b, &m, &t);
+            let predicted = Self::moved(b, &m, t);
             let r = self.noise(b);
             let inside: Vec<&Wall> = after
                 .iter()
                 .filter(|a| {
                     let nu =
                         Vector2::new(a.d_m - predicted[0], wrap_angle(a.gamma_rad - predicted[1]));
-                    // Generous: the calibration may still be far off.
-                    let s = r
-                        + self.noise(a)
-                        + Matrix2::from_diagonal(&Vector2::new(
-                            0.05f64.powi(2),
-                            2f64.to_radians().powi(2),
-                        ));
+                    let s = r + self.noise(a) + slack;
                     s.try_inverse()
                         .is_some_and(|si| (nu.transpose() * si * nu)[0] < self.config.gate_chi2)
                 })
@@ -244,7 +241,15 @@ impl OnlineCalibrator {
     }
 
     /// One stacked EKF update with every pair.
-    fn correct(&mut self, pairs: &[Pair<'_>], steps: &[[f64; 2]]) {
+    /// `t`, `q`: the motion over `steps` under the calibration as it
+    /// stands, and its covariance.
+    fn correct(
+        &mut self,
+        pairs: &[Pair<'_>],
+        steps: &[[f64; 2]],
+        t: &Pose2,
+        q: &SMatrix<f64, 3, 3>,
+    ) {
         if pairs.is_empty() {
             return;
         }
@@ -263,7 +268,11 @@ impl OnlineCalibrator {
                 }),
             )
         };
-        let h0 = h_of(&x);
+        let mount = Pose2::new(x[0], x[1], x[2]);
+        let h0: Vec<Vector2<f64>> = pairs
+            .iter()
+            .map(|p| Self::moved(p.before, &mount, t))
+            .collect();
         // ∂h/∂c by central differences (the motion is a chain of arcs).
         let step = [1e-4, 1e-4, 1e-5, 1e-5, 1e-5];
         let mut h = DMatrix::zeros(m, 5);
@@ -280,8 +289,6 @@ impl OnlineCalibrator {
         }
         // Noise: both walls' and the encoders' (through the motion, shared
         // by every pair).
-        let (t, q) = self.motion(&x, steps);
-        let mount = Pose2::new(x[0], x[1], x[2]);
         let mut j_t = DMatrix::zeros(m, 3);
         for (j, e) in [1e-5, 1e-5, 1e-6].iter().enumerate() {
             let shift = |sign: f64| {
@@ -299,7 +306,7 @@ impl OnlineCalibrator {
         let q = DMatrix::from_iterator(3, 3, q.iter().copied());
         let mut s = &h * DMatrix::from_iterator(5, 5, self.p.iter().copied()) * h.transpose()
             + &j_t * q * j_t.transpose();
-        let l = mount.inverse() * t * mount;
+        let l = mount.inverse() * *t * mount;
         for (k, p) in pairs.iter().enumerate() {
             let (sg, cg) = p.before.gamma_rad.sin_cos();
             let g = Matrix2::new(1.0, sg * l.x - cg * l.y, 0.0, 1.0);
@@ -311,8 +318,8 @@ impl OnlineCalibrator {
             m,
             pairs.iter().enumerate().flat_map(|(k, p)| {
                 [
-                    p.after.d_m - h0[2 * k],
-                    wrap_angle(p.after.gamma_rad - h0[2 * k + 1]),
+                    p.after.d_m - h0[k][0],
+                    wrap_angle(p.after.gamma_rad - h0[k][1]),
                 ]
             }),
         );
