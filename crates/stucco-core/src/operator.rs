@@ -199,6 +199,37 @@ pub struct Ack {
 mod tests {
     use super::*;
 
+    /// `plaster_surface` names a wall or the ceiling; anything else is
+    /// refused naming the value and what was expected (inside the tagged
+    /// `command` serde keeps no line and column).
+    #[test]
+    fn a_surface_is_a_wall_or_the_ceiling() {
+        let read = |surface: &str| {
+            serde_json::from_str::<Command>(&format!(
+                "{{\"type\": \"plaster_surface\",\n \"surface\": {surface}}}"
+            ))
+        };
+        assert_eq!(
+            read(r#"{"wall": "south"}"#).unwrap(),
+            Command::PlasterSurface {
+                surface: SurfaceName::Wall(WallName::South)
+            }
+        );
+        assert_eq!(
+            read(r#""ceiling""#).unwrap(),
+            Command::PlasterSurface {
+                surface: SurfaceName::Ceiling
+            }
+        );
+        for (bad, named, expected) in [
+            (r#""floor""#, "`floor`", "`ceiling`"),
+            (r#"{"wall": "up"}"#, "`up`", "`south`"),
+        ] {
+            let e = read(bad).unwrap_err().to_string();
+            assert!(e.contains(named) && e.contains(expected), "{e}");
+        }
+    }
+
     #[test]
     fn telecommands_read_as_json_any_client_can_write() {
         let t: Telecommand = serde_json::from_str(
