@@ -149,6 +149,10 @@ mod tests {
         }))
         .unwrap_or_default();
         let binary = frame.encode().len();
+        eprintln!(
+            "a 450-echo scan: {binary} B encoded, {} B as JSON",
+            json.len()
+        );
         assert_eq!(binary, 3616);
         assert!(
             3 * binary <= json.len(),
