@@ -22,6 +22,8 @@
 //!   and every wall in one EKF, each scan's walls matched by a
 //!   decision-directed Bayesian classifier; the [`WallMap`] saved and
 //!   loaded for localisation in a known map.
+//! - [`DefeaturedLaser`]: a laser preset made worse on purpose (range,
+//!   resolution, field of view, noise), as the sensor-precision paper does.
 //! - [`relative_pose_error`]: RPE (Kümmerle et al. 2009) of a trajectory.
 //! - [`WindowFinder`]: windows in the range camera's profiles.
 //! - [`synthetic`]: exact ray-cast scans of rooms with clutter, for tests.
@@ -46,6 +48,7 @@
 
 mod association;
 mod calibration;
+mod defeature;
 mod door;
 mod error;
 mod extractor;
@@ -66,6 +69,7 @@ mod wall_map;
 mod windows;
 
 pub use calibration::{Calibration, CalibratorConfig, OnlineCalibrator};
+pub use defeature::{Defeature, DefeaturedLaser};
 pub use door::{DoorConfig, DoorOpening, find_doors, find_doors_moving};
 pub use error::NavError;
 pub use extractor::WallExtractor;
