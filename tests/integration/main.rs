@@ -8,6 +8,7 @@ mod link;
 mod missions;
 mod plastering;
 mod replay_real_logs;
+mod study;
 mod walls_on_real_logs;
 
 /// `stucco run` on `missions/<name>.toml`, with the mission's own seed and

@@ -10,6 +10,8 @@
 //!   executive of `stucco-mission` in the simulator, with report, events,
 //!   map and checkpoints; [`Recorder`] and [`replay_run`] record a run as
 //!   MCAP and replay it through the executive.
+//! - [`run_study`]: the `stucco study` job: the sensor-precision paper's
+//!   de-featured lasers and scanner comparison ([`Study`]).
 //! - [`run_robot`]: the `stucco robot` process (the executive and the
 //!   simulator paced to the wall clock, on zenoh); [`Operator`]: the
 //!   `stucco op` console.
@@ -27,6 +29,8 @@ mod plastering;
 mod record;
 mod robot;
 mod simbench;
+mod study;
+mod study_plot;
 mod task_mission;
 mod walls;
 
@@ -45,6 +49,7 @@ pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{RobotJob, RobotRun, RobotState, run_robot};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
 pub use stucco_link::{Denial, Faults, FaultyRelay, LinkConfig, Mode as LinkMode, router};
+pub use study::{Axes, Axis, Compare, SettingReport, Study, StudyJob, StudyReport, run_study};
 pub use task_mission::{
     Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,
     run_task_mission, write_atomic,

@@ -185,17 +185,7 @@ impl Mission {
     /// errors).
     pub fn parse(text: &str, path: &Path) -> Result<Mission> {
         let text = text.to_owned();
-        let mission: Mission = toml::from_str(&text).map_err(|e| {
-            let (line, column) = e
-                .span()
-                .map(|s| stucco_core::line_column(&text, s.start))
-                .unwrap_or((0, 0));
-            BadInput(format!(
-                "{}:{line}:{column}: {}",
-                path.display(),
-                e.message()
-            ))
-        })?;
+        let mission: Mission = parse_toml(&text, path)?;
         let kinds = usize::from(mission.door_passage.is_some())
             + usize::from(mission.corridor.is_some())
             + usize::from(mission.room_size.is_some())
@@ -383,10 +373,27 @@ fn line_of_task(text: &str, n: usize, key: &str) -> usize {
     header
 }
 
+/// `text` (the file at `path`) read as a `T`; a fault is [`BadInput`]
+/// naming `PATH:LINE:COL` and what was expected there.
+pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
+    toml::from_str(text).map_err(|e| {
+        let (line, column) = e
+            .span()
+            .map(|s| stucco_core::line_column(text, s.start))
+            .unwrap_or((0, 0));
+        BadInput(format!(
+            "{}:{line}:{column}: {}",
+            path.display(),
+            e.message()
+        ))
+        .into()
+    })
+}
+
 /// The line of `key` in `table` (`""`: the top level; its sub-tables count
 /// as inside it), or of the table's header when the key is not written
 /// there; 0 when neither is.
-fn line_of(text: &str, table: &str, key: &str) -> usize {
+pub(crate) fn line_of(text: &str, table: &str, key: &str) -> usize {
     let mut current = String::new();
     let mut header = 0;
     for (i, raw) in text.lines().enumerate() {
