@@ -27,6 +27,14 @@ use crate::odometry::Displacement;
 use crate::wall::Wall;
 use crate::wall_map::{MapWall, WallId, WallMap, WallRole};
 
+/// Widest angle at which a line close along a map wall is taken for a
+/// fit across that wall and what stands before it, rad (beyond, it may be
+/// another wall meeting it).
+const ASKEW_MAX_RAD: f64 = 0.2;
+/// How far beyond the shallowest face before a wall such a line's ends
+/// may lie from the wall, m.
+const ASKEW_BAND_M: f64 = 0.15;
+
 /// Settings of the map-building filter.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -56,6 +64,13 @@ pub struct WallMapConfig {
     pub new_wall_min_length_m: f64,
     /// Fewest points of an observation that may found a new wall.
     pub new_wall_min_points: usize,
+    /// Largest RMS residual of the fit of an observation that may found a
+    /// new wall, m: one flat surface scatters by the laser's noise, a line
+    /// fitted across two surfaces (a wall and a radiator before it, seen
+    /// at a grazing angle) by more. Set from the laser (1.25 σ: a true
+    /// wall of 15 echoes is refused in under 4% of its sightings, and only
+    /// waits for the next); unbounded by default.
+    pub new_wall_max_rms_m: f64,
     /// Scans a candidate must be seen in before it joins the map.
     pub confirm_scans: u32,
     /// Scans a candidate may go unseen before it is forgotten.
@@ -95,6 +110,7 @@ impl Default for WallMapConfig {
             max_gap_m: 1.2,
             new_wall_min_length_m: 0.8,
             new_wall_min_points: 15,
+            new_wall_max_rms_m: f64::INFINITY,
             confirm_scans: 3,
             candidate_lifetime_scans: 20,
             parallel_rad: 3f64.to_radians(),
@@ -395,13 +411,7 @@ impl WallMapEkf {
         let mut joined: Vec<Wall> = Vec::with_capacity(walls.len());
         let mut pieces: Vec<Vec<usize>> = Vec::with_capacity(walls.len());
         for (j, z) in walls.iter().enumerate() {
-            let r = self.noise(z);
-            let same = joined.iter().position(|w| {
-                let delta = Vector2::new(w.d_m - z.d_m, wrap_angle(w.gamma_rad - z.gamma_rad));
-                (self.noise(w) + r)
-                    .try_inverse()
-                    .is_some_and(|inv| delta.dot(&(inv * delta)) < self.config.merge_chi2)
-            });
+            let same = joined.iter().position(|w| self.one_line(w, z));
             match same {
                 None => {
                     joined.push(z.clone());
@@ -441,6 +451,36 @@ impl WallMapEkf {
             }
         }
         (joined, pieces)
+    }
+
+    /// Whether two walls of one scan are pieces of one line: their lines
+    /// compared where they meet (between their nearest ends), under their
+    /// fits' covariances there and the walls' own waviness. Compared at the
+    /// laser instead, two short pieces far away agree for any offset (a
+    /// wall and a radiator before it), since their angles' errors swing
+    /// their distances from the laser by metres' lever.
+    fn one_line(&self, w: &Wall, z: &Wall) -> bool {
+        let (pa, pb) = w
+            .ends
+            .iter()
+            .flat_map(|a| z.ends.iter().map(move |b| (a, b)))
+            .min_by(|x, y| (x.0 - x.1).norm().total_cmp(&(y.0 - y.1).norm()))
+            .unwrap_or((&w.ends[0], &z.ends[0]));
+        let p = nalgebra::center(pa, pb);
+        let floor = self.config.min_sigma_d_m.powi(2);
+        let at_p = |x: &Wall| {
+            let t = x.direction().dot(&p.coords);
+            let off = x.normal().dot(&p.coords) - x.d_m;
+            let j = Matrix2::new(-1.0, t, 0.0, 1.0);
+            let mut c = j * x.covariance * j.transpose();
+            c[(0, 0)] += floor;
+            (off, c)
+        };
+        let ((fw, cw), (fz, cz)) = (at_p(w), at_p(z));
+        let delta = Vector2::new(fw - fz, wrap_angle(w.gamma_rad - z.gamma_rad));
+        (cw + cz)
+            .try_inverse()
+            .is_some_and(|inv| delta.dot(&(inv * delta)) < self.config.merge_chi2)
     }
 
     /// The pairings of each of `seen` with the map's walls.
@@ -592,6 +632,7 @@ impl WallMapEkf {
     fn consider(&mut self, z: &Wall, r: &Matrix2<f64>) -> Option<WallId> {
         if z.length_m() < self.config.new_wall_min_length_m
             || z.points < self.config.new_wall_min_points
+            || z.rms_residual_m > self.config.new_wall_max_rms_m
         {
             return None;
         }
@@ -599,8 +640,12 @@ impl WallMapEkf {
         let (s, c) = alpha.sin_cos();
         let (laser, _) = self.laser();
         let along = |p: &Point2<f64>| -s * p.x + c * p.y;
-        let [a, b] = z.ends.map(|e| along(&laser.transform_point(&e)));
+        let ends = z.ends.map(|e| laser.transform_point(&e));
+        let [a, b] = ends.map(|e| along(&e));
         let (lo, hi) = (a.min(b), a.max(b));
+        if self.askew_of_a_wall(alpha, &ends) {
+            return None;
+        }
         let cfg = &self.config;
         let scans = self.scans;
         // Sightings agree when their difference fits both uncertainties
@@ -643,6 +688,29 @@ impl WallMapEkf {
         }
         let extent_m = self.candidates.swap_remove(k).extent_m;
         Some(self.augment(z, r, extent_m))
+    }
+
+    /// Whether a stretch seen from `ends[0]` to `ends[1]` (map frame), at
+    /// angle `alpha`, lies along a map wall's stretch, close to it, but at
+    /// an angle no face before a wall stands at: walls that meet do so at
+    /// their ends, and what stands before a wall (a radiator, a cabinet) is
+    /// parallel to it. Such a line is a fit across two surfaces (a wall
+    /// and the radiator before it, seen far off at a grazing angle through
+    /// a door) and founds nothing.
+    fn askew_of_a_wall(&self, alpha: f64, ends: &[Point2<f64>; 2]) -> bool {
+        let cfg = &self.config;
+        self.walls.iter().any(|w| {
+            let angle = wrap_angle(alpha - w.alpha_rad).abs();
+            if angle < cfg.parallel_rad || angle > ASKEW_MAX_RAD {
+                return false;
+            }
+            let near = ends
+                .iter()
+                .all(|e| w.in_front(e).abs() < cfg.in_front_min_depth_m + ASKEW_BAND_M);
+            let [ta, tb] = ends.map(|e| w.along(&e));
+            let overlap = ta.max(tb).min(w.extent_m[1]) - ta.min(tb).max(w.extent_m[0]);
+            near && overlap > cfg.in_front_overlap_m
+        })
     }
 
     /// Adds the wall observed as `z` (noise `r`) to the state, correlated
