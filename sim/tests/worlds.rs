@@ -17,5 +17,5 @@ fn every_world_file_parses_and_builds() {
         }
     }
     names.sort();
-    assert_eq!(names, ["apartment", "corridor", "reference room"]);
+    assert_eq!(names, ["apartment", "corridor", "floor", "reference room"]);
 }

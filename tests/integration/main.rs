@@ -4,6 +4,7 @@
 mod acl;
 mod corridor;
 mod door_passage;
+mod floor;
 mod link;
 mod missions;
 mod plastering;

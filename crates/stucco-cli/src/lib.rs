@@ -19,6 +19,7 @@
 
 mod carmen;
 mod experiments;
+mod floor;
 mod log_replay;
 mod logging;
 mod mission;
@@ -36,6 +37,7 @@ mod walls;
 
 pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
+pub use floor::{FloorRun, map_floor};
 pub use log_replay::{
     LogReplayJob, LogReplayReport, OdomNoise, OdometrySource, OdometryTrust, RPE_PAIR_DISTANCE_M,
     Reference, run_log_replay,

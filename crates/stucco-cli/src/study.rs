@@ -35,6 +35,9 @@ use crate::mission::{BadInput, line_of, parse_toml};
 use crate::study_plot::{AxisPoint, draw_axis};
 use crate::walls::{ExtractorKind, make_extractor};
 
+/// A new wall of the map is founded only by a fit whose residual is
+/// within this many of the laser's σ: one flat surface.
+const FOUNDING_RMS_SIGMAS: f64 = 1.25;
 /// Control period of the drive, s.
 const DT_S: f64 = 0.02;
 /// Bumper time after which a run is given up: the tour runs into
@@ -368,7 +371,7 @@ impl StudyReport {
 
 /// One drive as the sensors saw it: kept once, mapped under every
 /// setting.
-struct Recording {
+pub(crate) struct Recording {
     encoders: Vec<EncoderSample>,
     /// The true pose at the end of each control period (and at the start).
     truth: Vec<(Stamp, Pose2)>,
@@ -376,6 +379,11 @@ struct Recording {
 }
 
 impl Recording {
+    /// The true path, one point a control period.
+    pub(crate) fn truth_path(&self) -> Vec<nalgebra::Point2<f64>> {
+        self.truth.iter().map(|(_, p)| p.position()).collect()
+    }
+
     /// The true pose at `t`, interpolated between control periods.
     fn truth_at(&self, t: Stamp) -> Pose2 {
         let k = self.truth.partition_point(|(s, _)| *s <= t);
@@ -408,7 +416,12 @@ fn study_world(study: &Study, world: &WorldSpec) -> WorldSpec {
 }
 
 /// Drives the tour once with `laser`, keeping every sensor reading.
-fn record(study: &Study, world: &WorldSpec, laser: &LaserSpec, seed: u64) -> Result<Recording> {
+pub(crate) fn record(
+    study: &Study,
+    world: &WorldSpec,
+    laser: &LaserSpec,
+    seed: u64,
+) -> Result<Recording> {
     let config = SimConfig {
         laser: laser.clone(),
         camera: None,
@@ -449,19 +462,19 @@ fn record(study: &Study, world: &WorldSpec, laser: &LaserSpec, seed: u64) -> Res
 }
 
 /// One mapping run's scores.
-struct RunScore {
-    rpe: Rpe,
-    odom_rpe: Rpe,
-    map: MapScore,
+pub(crate) struct RunScore {
+    pub(crate) rpe: Rpe,
+    pub(crate) odom_rpe: Rpe,
+    pub(crate) map: MapScore,
 }
 
 /// The final map's walls against the true walls.
 #[derive(Clone, Copy, Debug, Default)]
-struct MapScore {
-    walls: usize,
-    unmatched: usize,
-    dist_sq_sum: f64,
-    angle_sq_sum: f64,
+pub(crate) struct MapScore {
+    pub(crate) walls: usize,
+    pub(crate) unmatched: usize,
+    pub(crate) dist_sq_sum: f64,
+    pub(crate) angle_sq_sum: f64,
 }
 
 /// Scores the building walls of `ekf`'s map against `layout`'s true walls:
@@ -530,6 +543,19 @@ fn map_run(
     layout: &Layout,
     noise_seed: u64,
 ) -> Result<RunScore> {
+    map_run_with(study, rec, laser, layout, noise_seed, |_| {}).map(|(score, _)| score)
+}
+
+/// [`map_run`], `after_scan` shown the filter after every scan; the filter
+/// handed back at the end.
+pub(crate) fn map_run_with(
+    study: &Study,
+    rec: &Recording,
+    laser: &DefeaturedLaser,
+    layout: &Layout,
+    noise_seed: u64,
+    mut after_scan: impl FnMut(&WallMapEkf),
+) -> Result<(RunScore, WallMapEkf)> {
     let vehicle = SimConfig::default().vehicle;
     let mount = vehicle.laser_mount;
     let odo = &study.odometry;
@@ -544,6 +570,7 @@ fn map_run(
     let mut ekf = WallMapEkf::new(
         WallMapConfig {
             laser_mount: mount,
+            new_wall_max_rms_m: FOUNDING_RMS_SIGMAS * laser.spec.range_sigma_m,
             ..WallMapConfig::default()
         },
         start,
@@ -586,6 +613,7 @@ fn map_run(
         points.fill_deskewed(&scan, &twist);
         let walls = extractor.extract(&points);
         ekf.scan(&walls);
+        after_scan(&ekf);
         est.push(ekf.pose());
         odom.push(odom_pose);
         truth.push(rec.truth_at(t));
@@ -600,11 +628,12 @@ fn map_run(
             study.rpe_pair_m
         );
     };
-    Ok(RunScore {
+    let score = RunScore {
         rpe,
         odom_rpe,
         map: score_map(&ekf, layout),
-    })
+    };
+    Ok((score, ekf))
 }
 
 /// The RPE of all runs' pairs together.

@@ -24,6 +24,9 @@
 //!   loaded for localisation in a known map.
 //! - [`DefeaturedLaser`]: a laser preset made worse on purpose (range,
 //!   resolution, field of view, noise), as the sensor-precision paper does.
+//! - [`RoomGraph`]: the room-and-door map — rooms as nodes, doors as
+//!   edges — built on the map of walls as the robot passes doors, and
+//!   routes between named rooms.
 //! - [`relative_pose_error`]: RPE (Kümmerle et al. 2009) of a trajectory.
 //! - [`WindowFinder`]: windows in the range camera's profiles.
 //! - [`synthetic`]: exact ray-cast scans of rooms with clutter, for tests.
@@ -60,6 +63,7 @@ mod points;
 mod ransac;
 mod room;
 mod room_ekf;
+mod room_graph;
 mod rpe;
 mod rwht;
 mod segments;
@@ -83,6 +87,9 @@ pub use room::{RectangularRoom, RoomConfig, RoomSearch};
 pub use room_ekf::{
     RoomCovariance, RoomDoor, RoomEkf, RoomEkfConfig, RoomState, ScanUpdate, observe, observe_door,
     predict,
+};
+pub use room_graph::{
+    Door, DoorPlace, Room, RoomEvent, RoomGraph, RoomGraphConfig, RoomSide, Route,
 };
 pub use rpe::{Pairs, Rpe, relative_pose_error};
 pub use rwht::{RwhtConfig, RwhtExtractor};

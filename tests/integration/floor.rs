@@ -1,0 +1,68 @@
+//! A floor mapped while driving (`sim/worlds/floor.toml`: a corridor, four
+//! rooms, two of them the same size, a loop through them), 20 seeds at
+//! 0.5–1.0 m/s with the robot's own laser and odometry: the walls of the
+//! map against the true walls, nothing left in it that lies along no
+//! surface, and the room graph against the rooms and doors driven through.
+
+use std::path::PathBuf;
+use stucco_cli::{FloorRun, map_floor};
+use stucco_sim::WorldSpec;
+
+fn floor() -> WorldSpec {
+    let path = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../sim/worlds/floor.toml"
+    ));
+    WorldSpec::load(&path).unwrap()
+}
+
+#[test]
+fn a_floor_is_mapped_with_its_rooms_and_doors() {
+    let world = floor();
+    let runs: Vec<FloorRun> = (0..20u64)
+        .map(|k| {
+            let speed = 0.5 + 0.5 * k as f64 / 19.0;
+            map_floor(&world, 100 + k, speed, 200.0).unwrap()
+        })
+        .collect();
+    let mut correct = 0;
+    for r in &runs {
+        eprintln!(
+            "seed {} at {:.2} m/s: {} walls, {:.1} mm / {:.3}° RMS, {} stray; RPE {:.4} m {:.5} rad; {} rooms, {} doors{}",
+            r.seed,
+            r.speed_mps,
+            r.walls,
+            r.wall_dist_rms_m * 1e3,
+            r.wall_angle_rms_rad.to_degrees(),
+            r.stray_walls,
+            r.rpe.trans_mean_m,
+            r.rpe.rot_mean_rad,
+            r.graph.rooms().len(),
+            r.graph.doors().len(),
+            r.graph_fault
+                .as_ref()
+                .map(|f| format!(" — {f}"))
+                .unwrap_or_default()
+        );
+        correct += usize::from(r.graph_correct);
+    }
+    let n: f64 = runs.iter().map(|r| r.walls as f64).sum();
+    let rms = |f: fn(&FloorRun) -> f64| {
+        (runs
+            .iter()
+            .map(|r| f(r).powi(2) * r.walls as f64)
+            .sum::<f64>()
+            / n)
+            .sqrt()
+    };
+    let (dist, angle) = (rms(|r| r.wall_dist_rms_m), rms(|r| r.wall_angle_rms_rad));
+    eprintln!(
+        "all seeds: {n} walls, {:.1} mm / {:.3}° RMS; graphs right {correct} of 20",
+        dist * 1e3,
+        angle.to_degrees()
+    );
+    assert!(dist <= 0.01, "{dist}");
+    assert!(angle <= 0.3f64.to_radians(), "{angle}");
+    assert!(runs.iter().all(|r| r.stray_walls == 0));
+    assert!(correct >= 19, "{correct} of 20");
+}
