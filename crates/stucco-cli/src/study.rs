@@ -32,14 +32,13 @@ use stucco_nav::{
 use stucco_sim::{DynamicsConfig, Layout, SimConfig, Simulator, TourDriver, WorldSpec};
 
 use crate::mission::{BadInput, line_of, parse_toml};
+use crate::navigator::DT_S;
 use crate::study_plot::{AxisPoint, draw_axis};
 use crate::walls::{ExtractorKind, make_extractor};
 
 /// A new wall of the map is founded only by a fit whose residual is
 /// within this many of the laser's σ: one flat surface.
 const FOUNDING_RMS_SIGMAS: f64 = 1.25;
-/// Control period of the drive, s.
-const DT_S: f64 = 0.02;
 /// Bumper time after which a run is given up: the tour runs into
 /// something, s.
 const MAX_BLOCKED_S: f64 = 2.0;
