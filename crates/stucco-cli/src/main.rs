@@ -485,7 +485,11 @@ fn print_json(value: &impl serde::Serialize) -> ExitCode {
 /// Reports `e`; exit code 2 for bad input, 1 for the rest.
 fn fail(e: &anyhow::Error) -> ExitCode {
     eprintln!("error: {e:#}");
-    if e.downcast_ref::<BadInput>().is_some() {
+    let bad_config = matches!(
+        e.downcast_ref::<stucco_link::LinkError>(),
+        Some(stucco_link::LinkError::Config { .. })
+    );
+    if e.downcast_ref::<BadInput>().is_some() || bad_config {
         ExitCode::from(2)
     } else {
         ExitCode::FAILURE
@@ -823,10 +827,6 @@ fn main() -> ExitCode {
                 speed,
                 stop_after_s: stop_after,
             };
-            eprintln!(
-                "robot {} on zenoh: stucco/{}/... (Ctrl-C stops it)",
-                job.name, job.name
-            );
             match run_robot(&job, &Arc::new(AtomicBool::new(false))) {
                 Ok(run) => {
                     eprintln!(

@@ -4,7 +4,7 @@
 use crate::mission::{BadInput, Mission};
 use crate::navigator::{DT_S, Navigator};
 use crate::task_mission::RoomFrame;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -96,7 +96,18 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
         Navigator::with_sprayer(&world, mission.seed, x0, [known.room_sigma_m; 2], sprayer)?;
     nav.discover_doors(true);
     let mut exec = mission.executive(false);
-    let session = stucco_link::open(&job.link).context("joining the zenoh network")?;
+    let session = match stucco_link::open(&job.link) {
+        Ok(s) => s,
+        Err(e @ stucco_link::LinkError::Config { .. }) => {
+            return Err(BadInput(format!("--zenoh-config: {e}")).into());
+        }
+        Err(e) => return Err(anyhow::Error::from(e).context("joining the zenoh network")),
+    };
+    tracing::info!(
+        robot = %job.name,
+        "on zenoh: stucco/{}/... (Ctrl-C stops it)",
+        job.name
+    );
     if job.link.config_file.is_none() {
         tracing::warn!(
             robot = %job.name,

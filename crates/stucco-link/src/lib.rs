@@ -62,6 +62,18 @@ pub enum LinkError {
     /// Zenoh refused or failed.
     #[error("zenoh: {0}")]
     Zenoh(String),
+    /// The zenoh configuration file cannot be used as it is.
+    #[error("{path}:{line}:{column}: {why}")]
+    Config {
+        /// The file.
+        path: String,
+        /// Line of the fault (1-based; 0 when the file could not be read).
+        line: usize,
+        /// Its column (1-based).
+        column: usize,
+        /// What is wrong there.
+        why: String,
+    },
     /// A message was not what stucco writes.
     #[error("a message on {key} is not valid: {why}")]
     Malformed {
@@ -165,7 +177,7 @@ pub fn open(cfg: &LinkConfig) -> Result<Session, LinkError> {
         Mode::Router => "\"router\"",
     };
     let mut c = match &cfg.config_file {
-        Some(path) => zenoh::Config::from_file(path).map_err(z)?,
+        Some(path) => read_config(path)?,
         None => zenoh::Config::default(),
     };
     if cfg.config_file.is_none() || cfg.mode != Mode::Peer {
@@ -183,6 +195,60 @@ pub fn open(cfg: &LinkConfig) -> Result<Session, LinkError> {
             .map_err(z)?;
     }
     zenoh::open(c).wait().map_err(z)
+}
+
+/// The zenoh configuration in the JSON5 file at `path`; a fault is named
+/// with the file, line and column: a syntax error as JSON5 reports it, a
+/// key or value zenoh does not take as zenoh reports it, its own source
+/// location left out.
+fn read_config(path: &std::path::Path) -> Result<zenoh::Config, LinkError> {
+    let at = |line: usize, column: usize, why: String| LinkError::Config {
+        path: path.display().to_string(),
+        line,
+        column,
+        why,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| at(0, 0, format!("cannot read: {e}")))?;
+    if let Err(json5::Error::Message { msg, location }) =
+        json5::from_str::<serde_json::Value>(&text)
+    {
+        let (line, column) = location.map_or((0, 0), |l| (l.line, l.column));
+        // A syntax error's message draws the line; its last line says what
+        // was expected.
+        let why = msg
+            .lines()
+            .rev()
+            .map(|l| l.trim().trim_start_matches("= ").trim())
+            .find(|l| !l.is_empty())
+            .unwrap_or("not JSON5")
+            .to_owned();
+        return Err(at(line, column, why));
+    }
+    // Read from the file, zenoh's errors carry the fault's location.
+    zenoh::Config::from_file(path).map_err(|e| {
+        let (line, column, why) = zenoh_fault(&e.to_string());
+        at(line, column, why)
+    })
+}
+
+/// The line, column and message of a fault zenoh found in a configuration
+/// (`… Message { msg: "…", location: Some(Location { line: L, column: C })
+/// } at SRC`); the whole text, at line 0, when it is not in that form.
+fn zenoh_fault(text: &str) -> (usize, usize, String) {
+    let number_after = |key: &str| -> Option<usize> {
+        let rest = &text[text.find(key)? + key.len()..];
+        let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+        digits.parse().ok()
+    };
+    let msg = text.find("msg: \"").and_then(|i| {
+        let rest = &text[i + 6..];
+        rest.find("\", location")
+            .map(|j| rest[..j].replace("\\\"", "\""))
+    });
+    match (msg, number_after("line: "), number_after("column: ")) {
+        (Some(msg), Some(line), Some(column)) => (line, column, msg),
+        _ => (0, 0, text.to_owned()),
+    }
 }
 
 /// The robot's side: commands in, replies, state and events out.
@@ -610,5 +676,60 @@ impl Drop for FaultyRelay {
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod config_tests {
+    use super::*;
+
+    fn fault(text: &str) -> String {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("robot.json5");
+        std::fs::write(&path, text).unwrap();
+        let e = read_config(&path).map(|_| ()).unwrap_err();
+        assert!(matches!(e, LinkError::Config { .. }), "{e:?}");
+        e.to_string()
+            .replace(&path.display().to_string(), "robot.json5")
+    }
+
+    #[test]
+    fn a_bad_zenoh_config_names_its_file_line_and_column() {
+        // A brace left open: where JSON5 stops, and what it expected.
+        let e = fault("{\n  mode: \"peer\",\n  listen: { endpoints: [] \n  scouting: {},\n}\n");
+        assert!(e.starts_with("robot.json5:3:"), "{e}");
+        assert!(e.contains("expected"), "{e}");
+        assert!(!e.contains(".rs:"), "zenoh's own source is no help: {e}");
+        // A key zenoh does not know: its line and the keys it takes.
+        let e = fault("{\n  mode: \"peer\",\n  lisen: { endpoints: [] },\n}\n");
+        assert!(
+            e.starts_with("robot.json5:3:3: unknown field `lisen`"),
+            "{e}"
+        );
+        assert!(e.contains("`listen`") && !e.contains(".rs:"), "{e}");
+        // A file that is not there.
+        let e = read_config(std::path::Path::new("/nonexistent/z.json5"))
+            .map(|_| ())
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("/nonexistent/z.json5:0:0: cannot read"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_shipped_zenoh_configs_load() {
+        let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/config"));
+        let mut n = 0;
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "json5") {
+                read_config(&path).unwrap_or_else(|e| panic!("{e}"));
+                n += 1;
+            }
+        }
+        assert!(n >= 4, "{n}");
     }
 }
