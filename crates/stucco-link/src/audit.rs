@@ -13,7 +13,7 @@
 //! it.
 
 use serde::Serialize;
-use std::collections::BTreeMap;
+use std::collections::VecDeque;
 use std::sync::Mutex;
 use std::sync::mpsc::{Receiver, Sender, channel};
 use tracing::field::{Field, Visit};
@@ -97,13 +97,38 @@ fn decision(message: &str) -> Option<Decision<'_>> {
 struct Registry {
     /// Key prefix (`stucco/NAME/`) and where its refusals go.
     sinks: Vec<(String, Sender<Denial>)>,
-    /// The subject zenoh named for each zenoh id.
-    subjects: BTreeMap<String, String>,
+    /// The subject zenoh named for each zenoh id, the latest named last;
+    /// at most [`SUBJECTS_KEPT`], so a robot that sees many short operator
+    /// sessions keeps a bounded memory.
+    subjects: VecDeque<(String, String)>,
+}
+
+/// Zenoh ids whose subject is remembered.
+const SUBJECTS_KEPT: usize = 256;
+
+impl Registry {
+    fn remember(&mut self, zid: &str, subject: &str) {
+        if let Some(i) = self.subjects.iter().position(|(z, _)| z == zid) {
+            self.subjects.remove(i);
+        }
+        self.subjects
+            .push_back((zid.to_owned(), subject.to_owned()));
+        while self.subjects.len() > SUBJECTS_KEPT {
+            self.subjects.pop_front();
+        }
+    }
+
+    fn subject_of(&self, zid: &str) -> Option<&str> {
+        self.subjects
+            .iter()
+            .find(|(z, _)| z == zid)
+            .map(|(_, s)| s.as_str())
+    }
 }
 
 static REGISTRY: Mutex<Registry> = Mutex::new(Registry {
     sinks: Vec::new(),
-    subjects: BTreeMap::new(),
+    subjects: VecDeque::new(),
 });
 
 /// Refusals on key expressions under `prefix` from now on.
@@ -120,14 +145,14 @@ fn record(d: &Decision<'_>) {
         return;
     };
     if let Some(s) = d.subject {
-        r.subjects.insert(d.zid.to_owned(), s.to_owned());
+        r.remember(d.zid, s);
     }
     if d.allowed {
         return;
     }
     let denial = Denial {
         zid: d.zid.to_owned(),
-        subject: r.subjects.get(d.zid).cloned().unwrap_or_default(),
+        subject: r.subject_of(d.zid).unwrap_or_default().to_owned(),
         action: d.action.to_owned(),
         key: d.key.to_owned(),
     };
@@ -170,6 +195,29 @@ impl Visit for Message {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_subjects_remembered_are_bounded_and_the_latest_kept() {
+        let mut r = Registry {
+            sinks: Vec::new(),
+            subjects: VecDeque::new(),
+        };
+        for i in 0..SUBJECTS_KEPT + 10 {
+            r.remember(&format!("z{i}"), &format!("user{i}"));
+        }
+        assert_eq!(r.subjects.len(), SUBJECTS_KEPT);
+        assert_eq!(r.subject_of("z0"), None);
+        let last = SUBJECTS_KEPT + 9;
+        assert_eq!(
+            r.subject_of(&format!("z{last}")),
+            Some(format!("user{last}").as_str())
+        );
+        // Named again, an id moves to the back and its new subject holds.
+        r.remember("z20", "ann");
+        r.remember("z-new", "vic");
+        assert_eq!(r.subject_of("z20"), Some("ann"));
+        assert_eq!(r.subjects.len(), SUBJECTS_KEPT);
+    }
 
     #[test]
     fn reads_zenoh_decisions() {
