@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 use stucco_core::{EncoderSample, LaserSpec, Platform, Pose2, Scan, Stamp, wrap_angle};
 use stucco_nav::{
     Defeature, DefeaturedLaser, Displacement, OdometryConfig, Pairs, Rpe, ScanPoints,
-    WallMapConfig, WallMapEkf, WallRole, relative_pose_error, sensor_twist, twist_at,
+    WallMapConfig, WallMapEkf, WallRole, relative_pose_error, sensor_twist, twist_at, wheel_steps,
 };
 use stucco_sim::{DynamicsConfig, Layout, SimConfig, Simulator, TourDriver, WorldSpec};
 
@@ -509,30 +509,6 @@ fn score_map(ekf: &WallMapEkf, layout: &Layout) -> MapScore {
     score
 }
 
-/// The wheels' travel from the first sample to `t`, m, interpolated
-/// within the sample period that spans it.
-fn wheels_at(samples: &[EncoderSample], t: Stamp, per_tick: [f64; 2]) -> [f64; 2] {
-    let Some(first) = samples.first() else {
-        return [0.0; 2];
-    };
-    let travel = |s: &EncoderSample| {
-        [
-            (s.left_ticks - first.left_ticks) as f64 * per_tick[0],
-            (s.right_ticks - first.right_ticks) as f64 * per_tick[1],
-        ]
-    };
-    let k = samples.partition_point(|s| s.stamp <= t);
-    match (k.checked_sub(1).map(|i| &samples[i]), samples.get(k)) {
-        (Some(a), Some(b)) => {
-            let f = t.seconds_since(a.stamp) / b.stamp.seconds_since(a.stamp).max(1e-12);
-            let (wa, wb) = (travel(a), travel(b));
-            [wa[0] + f * (wb[0] - wa[0]), wa[1] + f * (wb[1] - wa[1])]
-        }
-        (Some(a), None) => travel(a),
-        _ => [0.0; 2],
-    }
-}
-
 /// Maps `rec` seen through `laser` from nothing: the EKF's trajectory and
 /// the odometry's at each scan, against the truth.
 fn map_run(
@@ -558,8 +534,6 @@ pub(crate) fn map_run_with(
     let vehicle = SimConfig::default().vehicle;
     let mount = vehicle.laser_mount;
     let odo = &study.odometry;
-    let per_tick = [0, 1]
-        .map(|w| std::f64::consts::TAU * odo.wheel_radius_m[w] / f64::from(odo.ticks_per_rev));
     let mut rng = ChaCha8Rng::seed_from_u64(noise_seed);
     let mut extractor = make_extractor(ExtractorKind::Rwht, &laser.spec)?;
     let Some(first) = rec.scans.first() else {
@@ -592,17 +566,8 @@ pub(crate) fn map_run_with(
             // The arcs of every encoder period between the two scans, the
             // first and last cut at the scans' stamps.
             let mut d = Displacement::zero(since);
-            let mut at = since;
-            let mut w0 = wheels_at(&rec.encoders, since, per_tick);
-            let from = rec.encoders.partition_point(|s| s.stamp <= since);
-            let until = rec.encoders.partition_point(|s| s.stamp < t);
-            for s in rec.encoders[from..until].iter().map(|s| s.stamp).chain([t]) {
-                if s <= at {
-                    continue;
-                }
-                let w1 = wheels_at(&rec.encoders, s, per_tick);
-                d.extend([w1[0] - w0[0], w1[1] - w0[1]], s, odo);
-                (w0, at) = (w1, s);
+            for (w, at) in wheel_steps(&rec.encoders, since, t, odo) {
+                d.extend(w, at, odo);
             }
             ekf.predict(&d);
             odom_pose = odom_pose * d.pose;
@@ -977,25 +942,6 @@ mod tests {
         let sd = (all.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / 6.0).sqrt();
         assert_eq!(p.pairs, 6);
         assert!((p.trans_mean_m - m).abs() < 1e-12 && (p.trans_std_m - sd).abs() < 1e-12);
-    }
-
-    #[test]
-    fn wheel_travel_is_interpolated_between_samples() {
-        let s = |t: f64, l: i64, r: i64| EncoderSample {
-            stamp: Stamp::from_secs_f64(t),
-            left_ticks: l,
-            right_ticks: r,
-        };
-        let samples = [s(1.0, 100, 100), s(1.02, 120, 140)];
-        let w = wheels_at(&samples, Stamp::from_secs_f64(1.015), [0.001, 0.002]);
-        assert!(
-            (w[0] - 0.015).abs() < 1e-9 && (w[1] - 0.06).abs() < 1e-9,
-            "{w:?}"
-        );
-        assert_eq!(
-            wheels_at(&samples, Stamp::from_secs_f64(3.0), [0.001, 0.002]),
-            [0.02, 0.08]
-        );
     }
 
     #[test]

@@ -80,7 +80,10 @@ pub use extractor::WallExtractor;
 pub use hough::{HoughConfig, HoughTransform, Weighting};
 pub use line_fit::FitConfig;
 pub use map_ekf::{MapUpdate, WallMapConfig, WallMapEkf};
-pub use odometry::{DeadReckoning, Displacement, OdometryConfig, sensor_twist, twist_at};
+pub use odometry::{
+    DeadReckoning, Displacement, OdometryConfig, sensor_twist, twist_at, wheel_steps,
+    wheel_travel_at,
+};
 pub use points::{ScanPoint, ScanPoints};
 pub use ransac::{RansacConfig, RansacExtractor};
 pub use room::{RectangularRoom, RoomConfig, RoomSearch};

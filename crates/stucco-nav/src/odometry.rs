@@ -145,6 +145,61 @@ pub fn twist_at(samples: &[EncoderSample], t: Stamp, cfg: &OdometryConfig) -> Tw
     Twist2::new((dl + dr) / 2.0 / dt, 0.0, (dr - dl) / cfg.track_m / dt)
 }
 
+/// The wheels' travel (left, right) from the first of `samples` to `t`,
+/// m, at the nominal radii of `cfg`, interpolated within the sample period
+/// that spans `t` (the speed taken as constant within it).
+pub fn wheel_travel_at(samples: &[EncoderSample], t: Stamp, cfg: &OdometryConfig) -> [f64; 2] {
+    let Some(first) = samples.first() else {
+        return [0.0; 2];
+    };
+    let per_tick =
+        |w: usize| std::f64::consts::TAU * cfg.wheel_radius_m[w] / f64::from(cfg.ticks_per_rev);
+    let travel = |s: &EncoderSample| {
+        [
+            (s.left_ticks - first.left_ticks) as f64 * per_tick(0),
+            (s.right_ticks - first.right_ticks) as f64 * per_tick(1),
+        ]
+    };
+    let k = samples.partition_point(|s| s.stamp <= t);
+    match (k.checked_sub(1).map(|i| &samples[i]), samples.get(k)) {
+        (Some(a), Some(b)) => {
+            let f = t.seconds_since(a.stamp) / b.stamp.seconds_since(a.stamp).max(1e-12);
+            let (wa, wb) = (travel(a), travel(b));
+            [wa[0] + f * (wb[0] - wa[0]), wa[1] + f * (wb[1] - wa[1])]
+        }
+        (Some(a), None) => travel(a),
+        _ => [0.0; 2],
+    }
+}
+
+/// The wheels' travel over each encoder period from `since` to `until`,
+/// the first and last periods cut at those instants, with the instant each
+/// ends: the arcs the motion between two scans' stamps is made of.
+pub fn wheel_steps(
+    samples: &[EncoderSample],
+    since: Stamp,
+    until: Stamp,
+    cfg: &OdometryConfig,
+) -> Vec<([f64; 2], Stamp)> {
+    let from = samples.partition_point(|s| s.stamp <= since);
+    let to = samples.partition_point(|s| s.stamp < until);
+    let mut out = Vec::with_capacity(to.saturating_sub(from) + 1);
+    let (mut at, mut w0) = (since, wheel_travel_at(samples, since, cfg));
+    for t in samples[from..to.max(from)]
+        .iter()
+        .map(|s| s.stamp)
+        .chain([until])
+    {
+        if t <= at {
+            continue;
+        }
+        let w1 = wheel_travel_at(samples, t, cfg);
+        out.push(([w1[0] - w0[0], w1[1] - w0[1]], t));
+        (w0, at) = (w1, t);
+    }
+    out
+}
+
 /// The velocity, in its own frame, of a sensor mounted at `mount` on a
 /// robot moving with `robot`.
 pub fn sensor_twist(robot: &Twist2, mount: &Pose2) -> Twist2 {
@@ -222,6 +277,45 @@ impl DeadReckoning {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn wheel_travel_is_interpolated_and_cut_at_the_instants_asked() {
+        let cfg = OdometryConfig {
+            wheel_radius_m: [
+                1000.0 / std::f64::consts::TAU,
+                2000.0 / std::f64::consts::TAU,
+            ],
+            ticks_per_rev: 1_000_000,
+            ..OdometryConfig::default()
+        }; // 1 mm and 2 mm a tick
+        let s = |t: f64, l: i64, r: i64| EncoderSample {
+            stamp: Stamp::from_secs_f64(t),
+            left_ticks: l,
+            right_ticks: r,
+        };
+        let samples = [s(1.0, 100, 100), s(1.02, 120, 140), s(1.04, 140, 180)];
+        let w = wheel_travel_at(&samples, Stamp::from_secs_f64(1.015), &cfg);
+        assert!(
+            (w[0] - 0.015).abs() < 1e-9 && (w[1] - 0.06).abs() < 1e-9,
+            "{w:?}"
+        );
+        let end = wheel_travel_at(&samples, Stamp::from_secs_f64(3.0), &cfg);
+        assert!(
+            (end[0] - 0.04).abs() < 1e-9 && (end[1] - 0.16).abs() < 1e-9,
+            "{end:?}"
+        );
+        // From 1.01 to 1.03: half of each period, cut at 1.02.
+        let steps = wheel_steps(
+            &samples,
+            Stamp::from_secs_f64(1.01),
+            Stamp::from_secs_f64(1.03),
+            &cfg,
+        );
+        assert_eq!(steps.len(), 2);
+        assert!((steps[0].0[0] - 0.01).abs() < 1e-9 && (steps[1].0[1] - 0.04).abs() < 1e-9);
+        assert_eq!(steps[0].1, Stamp::from_secs_f64(1.02));
+        assert_eq!(steps[1].1, Stamp::from_secs_f64(1.03));
+    }
 
     fn sample(t_s: f64, l: i64, r: i64) -> EncoderSample {
         EncoderSample {
