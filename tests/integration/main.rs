@@ -2,6 +2,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod acl;
+mod calibration;
 mod corridor;
 mod door_passage;
 mod floor;

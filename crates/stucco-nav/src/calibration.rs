@@ -86,8 +86,10 @@ pub struct CalibratorConfig {
     /// Fewest measurements a wall must rest on to be used.
     pub min_points: usize,
     /// σ added to a wall's predicted distance (m) and direction (rad) when
-    /// pairing it with the next scan's walls: the calibration may still be
-    /// far off, and the walls of a room are metres and 90° apart.
+    /// pairing it with the next scan's walls, beyond the walls' noise and
+    /// the calibration's own uncertainty (which the gate carries): the
+    /// robot's true motion strays from the encoders' by more than their
+    /// noise model says (creep, slip).
     pub association_slack: [f64; 2],
 }
 
@@ -100,7 +102,7 @@ impl Default for CalibratorConfig {
             min_sigma_gamma_rad: 0.05f64.to_radians(),
             gate_chi2: 9.21,
             min_points: 20,
-            association_slack: [0.05, 2f64.to_radians()],
+            association_slack: [0.005, 0.2f64.to_radians()],
         }
     }
 }
@@ -173,7 +175,7 @@ impl OnlineCalibrator {
         let steps = std::mem::take(&mut self.steps);
         // The motion under the calibration as it stands, for both.
         let (t, q) = self.motion(&self.x, &steps);
-        let pairs = self.associate(&before, &now, &t);
+        let pairs = self.associate(&before, &now, &steps, &t);
         let n = pairs.len();
         self.correct(&pairs, &steps, &t, &q);
         self.used += n;
@@ -211,33 +213,70 @@ impl OnlineCalibrator {
     }
 
     /// Each wall of the first scan with the one wall of the second within
-    /// the gate (none when two are).
-    fn associate<'a>(&self, before: &'a [Wall], after: &'a [Wall], t: &Pose2) -> Vec<Pair<'a>> {
+    /// the gate, and that wall with no other of the first scan (none when
+    /// two are: a radiator's face 4 cm before a wall is not that wall).
+    /// The gate is the walls' noise, the calibration's own uncertainty
+    /// carried into the prediction (wide while the guess is poor, narrow
+    /// once it is known) and a floor for what neither knows.
+    fn associate<'a>(
+        &self,
+        before: &'a [Wall],
+        after: &'a [Wall],
+        steps: &[[f64; 2]],
+        t: &Pose2,
+    ) -> Vec<Pair<'a>> {
         let m = Pose2::new(self.x[0], self.x[1], self.x[2]);
         let [slack_d, slack_g] = self.config.association_slack;
         let slack = Matrix2::from_diagonal(&Vector2::new(slack_d.powi(2), slack_g.powi(2)));
-        let mut out = Vec::new();
-        for b in before {
+        // The motion and mount under each state nudged both ways, for the
+        // predictions' Jacobians.
+        let step = [1e-4, 1e-4, 1e-5, 1e-5, 1e-5];
+        let nudged: Vec<[(Pose2, Pose2); 2]> = step
+            .iter()
+            .enumerate()
+            .map(|(j, e)| {
+                [1.0, -1.0].map(|sign| {
+                    let mut c = self.x;
+                    c[j] += sign * e;
+                    (Pose2::new(c[0], c[1], c[2]), self.motion(&c, steps).0)
+                })
+            })
+            .collect();
+        let mut pairs: Vec<(usize, usize)> = Vec::new();
+        for (i, b) in before.iter().enumerate() {
             let predicted = Self::moved(b, &m, t);
-            let r = self.noise(b);
-            let inside: Vec<&Wall> = after
+            let mut jac = SMatrix::<f64, 2, 5>::zeros();
+            for (j, [(mu, tu), (md, td)]) in nudged.iter().enumerate() {
+                let d = Self::moved(b, mu, tu) - Self::moved(b, md, td);
+                jac[(0, j)] = d[0] / (2.0 * step[j]);
+                jac[(1, j)] = wrap_angle(d[1]) / (2.0 * step[j]);
+            }
+            let own = jac * self.p * jac.transpose();
+            let r = self.noise(b) + own + slack;
+            let inside: Vec<usize> = after
                 .iter()
-                .filter(|a| {
+                .enumerate()
+                .filter(|(_, a)| {
                     let nu =
                         Vector2::new(a.d_m - predicted[0], wrap_angle(a.gamma_rad - predicted[1]));
-                    let s = r + self.noise(a) + slack;
+                    let s = r + self.noise(a);
                     s.try_inverse()
                         .is_some_and(|si| (nu.transpose() * si * nu)[0] < self.config.gate_chi2)
                 })
+                .map(|(k, _)| k)
                 .collect();
-            if let [a] = inside[..] {
-                out.push(Pair {
-                    before: b,
-                    after: a,
-                });
+            if let [k] = inside[..] {
+                pairs.push((i, k));
             }
         }
-        out
+        pairs
+            .iter()
+            .filter(|(_, k)| pairs.iter().filter(|(_, o)| o == k).count() == 1)
+            .map(|&(i, k)| Pair {
+                before: &before[i],
+                after: &after[k],
+            })
+            .collect()
     }
 
     /// One stacked EKF update with every pair.
