@@ -89,15 +89,8 @@ fn the_laser_mount_and_the_odometry_calibrate_while_driving() {
         points.fill_deskewed(scan, &twist);
         cal.scan(&extractor.extract(&points));
     }
-    let e = cal.estimate();
-    let sigma = cal.sigma();
-    let err = [
-        e.laser_mount.x - truth.laser_mount.x,
-        e.laser_mount.y - truth.laser_mount.y,
-        wrap_angle(e.laser_mount.theta - truth.laser_mount.theta),
-        e.wheel_scale / truth.wheel_scale - 1.0,
-        e.track_scale / truth.track_scale - 1.0,
-    ];
+    let sigma = cal.error_sigma(&truth);
+    let err = cal.estimate().error_to(&truth);
     let report = format!(
         "errors {:.1} mm, {:.1} mm, {:.3}°, {:.3}%, {:.3}% (σ {sigma:?}) from {} wall pairs of {} scans",
         err[0] * 1e3,
@@ -113,13 +106,8 @@ fn the_laser_mount_and_the_odometry_calibrate_while_driving() {
     assert!(err[2].abs() <= 0.2f64.to_radians(), "{report}");
     assert!(err[3].abs() <= 0.005 && err[4].abs() <= 0.005, "{report}");
     // The filter knows how well it knows: every error within 3σ.
-    for (i, e) in err.iter().enumerate() {
-        let s = match i {
-            3 => sigma[i] / truth.wheel_scale,
-            4 => sigma[i] / truth.track_scale,
-            _ => sigma[i],
-        };
-        assert!(e.abs() <= 3.0 * s, "{i}: {report}");
+    for (e, s) in err.iter().zip(sigma) {
+        assert!(e.abs() <= 3.0 * s, "{report}");
     }
 }
 

@@ -47,6 +47,18 @@ impl Calibration {
         }
     }
 
+    /// How far this is from `truth`: mount x, y (m) and θ (rad), the
+    /// wheel and track scales as fractions of the true ones.
+    pub fn error_to(&self, truth: &Calibration) -> [f64; 5] {
+        [
+            self.laser_mount.x - truth.laser_mount.x,
+            self.laser_mount.y - truth.laser_mount.y,
+            wrap_angle(self.laser_mount.theta - truth.laser_mount.theta),
+            self.wheel_scale / truth.wheel_scale - 1.0,
+            self.track_scale / truth.track_scale - 1.0,
+        ]
+    }
+
     fn state(&self) -> SVector<f64, 5> {
         SVector::<f64, 5>::from([
             self.laser_mount.x,
@@ -150,6 +162,19 @@ impl OnlineCalibrator {
     /// track scale.
     pub fn sigma(&self) -> [f64; 5] {
         std::array::from_fn(|i| self.p[(i, i)].max(0.0).sqrt())
+    }
+
+    /// σ of the estimate's error against `truth` as
+    /// [`Calibration::error_to`] measures it.
+    pub fn error_sigma(&self, truth: &Calibration) -> [f64; 5] {
+        let s = self.sigma();
+        [
+            s[0],
+            s[1],
+            s[2],
+            s[3] / truth.wheel_scale,
+            s[4] / truth.track_scale,
+        ]
     }
 
     /// Wall pairs used so far.
@@ -512,14 +537,8 @@ mod tests {
         };
         let (cal, truth) = drive(guess, 3, 7);
         let e = cal.estimate();
-        let sigma = cal.sigma();
-        let err = [
-            e.laser_mount.x - truth.laser_mount.x,
-            e.laser_mount.y - truth.laser_mount.y,
-            wrap_angle(e.laser_mount.theta - truth.laser_mount.theta),
-            e.wheel_scale / truth.wheel_scale - 1.0,
-            e.track_scale / truth.track_scale - 1.0,
-        ];
+        let sigma = cal.error_sigma(&truth);
+        let err = e.error_to(&truth);
         let report = format!("{e:?} σ {sigma:?} err {err:?} pairs {}", cal.pairs_used());
         eprintln!("calibration after three loops: {report}");
         // The targets: 5 mm, 0.2°, 0.5%.
@@ -527,13 +546,8 @@ mod tests {
         assert!(err[2].abs() <= 0.2f64.to_radians(), "{report}");
         assert!(err[3].abs() <= 0.005 && err[4].abs() <= 0.005, "{report}");
         // The filter knows how well it knows: every error within 3σ.
-        for i in 0..5 {
-            let s = match i {
-                3 => sigma[i] / truth.wheel_scale,
-                4 => sigma[i] / truth.track_scale,
-                _ => sigma[i],
-            };
-            assert!(err[i].abs() <= 3.0 * s + 1e-4, "{i}: {report}");
+        for (e, s) in err.iter().zip(sigma) {
+            assert!(e.abs() <= 3.0 * s + 1e-4, "{report}");
         }
     }
 }
