@@ -209,8 +209,14 @@ fn read_config(path: &std::path::Path) -> Result<zenoh::Config, LinkError> {
         why,
     };
     let text = std::fs::read_to_string(path).map_err(|e| at(0, 0, format!("cannot read: {e}")))?;
-    if let Err(json5::Error::Message { msg, location }) =
-        json5::from_str::<serde_json::Value>(&text)
+    // Zenoh also reads YAML (by the file's extension); JSON5 is checked
+    // here, YAML left to zenoh.
+    let yaml = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
+    if !yaml
+        && let Err(json5::Error::Message { msg, location }) =
+            json5::from_str::<serde_json::Value>(&text)
     {
         let (line, column) = location.map_or((0, 0), |l| (l.line, l.column));
         // A syntax error's message draws the line; its last line says what

@@ -200,7 +200,7 @@ impl OnlineCalibrator {
         let steps = std::mem::take(&mut self.steps);
         // The motion under the calibration as it stands, for both.
         let (t, q) = self.motion(&self.x, &steps);
-        let pairs = self.associate(&before, &now, &steps, &t);
+        let pairs = self.associate(&before, &now, &steps, &t, &q);
         let n = pairs.len();
         self.correct(&pairs, &steps, &t, &q);
         self.used += n;
@@ -249,8 +249,10 @@ impl OnlineCalibrator {
         after: &'a [Wall],
         steps: &[[f64; 2]],
         t: &Pose2,
+        q: &SMatrix<f64, 3, 3>,
     ) -> Vec<Pair<'a>> {
         let m = Pose2::new(self.x[0], self.x[1], self.x[2]);
+        let l = m.inverse() * *t * m;
         let [slack_d, slack_g] = self.config.association_slack;
         let slack = Matrix2::from_diagonal(&Vector2::new(slack_d.powi(2), slack_g.powi(2)));
         // The motion and mount under each state nudged both ways, for the
@@ -267,8 +269,8 @@ impl OnlineCalibrator {
                 })
             })
             .collect();
-        let mut pairs: Vec<(usize, usize)> = Vec::new();
-        for (i, b) in before.iter().enumerate() {
+        let mut gated: Vec<Vec<usize>> = Vec::with_capacity(before.len());
+        for b in before {
             let predicted = Self::moved(b, &m, t);
             let mut jac = SMatrix::<f64, 2, 5>::zeros();
             for (j, [(mu, tu), (md, td)]) in nudged.iter().enumerate() {
@@ -276,8 +278,23 @@ impl OnlineCalibrator {
                 jac[(0, j)] = d[0] / (2.0 * step[j]);
                 jac[(1, j)] = wrap_angle(d[1]) / (2.0 * step[j]);
             }
-            let own = jac * self.p * jac.transpose();
-            let r = self.noise(b) + own + slack;
+            // The encoders' noise through the motion, as the update takes
+            // it.
+            let mut j_t = SMatrix::<f64, 2, 3>::zeros();
+            for (j, e) in [1e-5, 1e-5, 1e-6].iter().enumerate() {
+                let shift = |sign: f64| {
+                    let mut v = [t.x, t.y, t.theta];
+                    v[j] += sign * e;
+                    Pose2::new(v[0], v[1], v[2])
+                };
+                let d = Self::moved(b, &m, &shift(1.0)) - Self::moved(b, &m, &shift(-1.0));
+                j_t[(0, j)] = d[0] / (2.0 * e);
+                j_t[(1, j)] = wrap_angle(d[1]) / (2.0 * e);
+            }
+            let (sg, cg) = b.gamma_rad.sin_cos();
+            let g = Matrix2::new(1.0, sg * l.x - cg * l.y, 0.0, 1.0);
+            let own = jac * self.p * jac.transpose() + j_t * q * j_t.transpose();
+            let r = g * self.noise(b) * g.transpose() + own + slack;
             let inside: Vec<usize> = after
                 .iter()
                 .enumerate()
@@ -290,16 +307,20 @@ impl OnlineCalibrator {
                 })
                 .map(|(k, _)| k)
                 .collect();
-            if let [k] = inside[..] {
-                pairs.push((i, k));
-            }
+            gated.push(inside);
         }
-        pairs
+        // A wall of the second scan in the gate of two of the first pairs
+        // with neither, whether or not their gates hold others too.
+        let claimed = |k: usize| gated.iter().filter(|g| g.contains(&k)).count();
+        gated
             .iter()
-            .filter(|(_, k)| pairs.iter().filter(|(_, o)| o == k).count() == 1)
-            .map(|&(i, k)| Pair {
-                before: &before[i],
-                after: &after[k],
+            .enumerate()
+            .filter_map(|(i, inside)| match inside[..] {
+                [k] if claimed(k) == 1 => Some(Pair {
+                    before: &before[i],
+                    after: &after[k],
+                }),
+                _ => None,
             })
             .collect()
     }

@@ -147,6 +147,13 @@ impl DefeaturedLaser {
         })
     }
 
+    /// When the scan made from the preset's `scan` starts: the time of its
+    /// first kept beam.
+    pub fn stamp_of(&self, scan: &Scan) -> Stamp {
+        let first = self.keep.first().copied().unwrap_or(0);
+        Stamp::from_secs_f64(scan.stamp.as_secs_f64() + scan.beam_time_s(first))
+    }
+
     /// The scan this laser would have taken where the preset took `scan`
     /// (a scan of the preset, beam for beam); the noise drawn from `rng`.
     /// `None` when `scan` is not one of the preset's.
@@ -169,7 +176,7 @@ impl DefeaturedLaser {
             _ => return None,
         };
         let sweep = scan.beam_time_s(last) - scan.beam_time_s(first);
-        let start = scan.stamp.as_secs_f64() + scan.beam_time_s(first);
+        let start = self.stamp_of(scan).as_secs_f64();
         Some(Scan::new(
             Stamp::from_secs_f64(start),
             scan.sensor.clone(),

@@ -467,13 +467,17 @@ impl WallMapEkf {
             .min_by(|x, y| (x.0 - x.1).norm().total_cmp(&(y.0 - y.1).norm()))
             .unwrap_or((&w.ends[0], &z.ends[0]));
         let p = nalgebra::center(pa, pb);
-        let floor = self.config.min_sigma_d_m.powi(2);
+        let (floor_d, floor_g) = (
+            self.config.min_sigma_d_m.powi(2),
+            self.config.min_sigma_gamma_rad.powi(2),
+        );
         let at_p = |x: &Wall| {
             let t = x.direction().dot(&p.coords);
             let off = x.normal().dot(&p.coords) - x.d_m;
             let j = Matrix2::new(-1.0, t, 0.0, 1.0);
             let mut c = j * x.covariance * j.transpose();
-            c[(0, 0)] += floor;
+            c[(0, 0)] += floor_d;
+            c[(1, 1)] += floor_g;
             (off, c)
         };
         let ((fw, cw), (fz, cz)) = (at_p(w), at_p(z));
@@ -632,6 +636,7 @@ impl WallMapEkf {
     fn consider(&mut self, z: &Wall, r: &Matrix2<f64>) -> Option<WallId> {
         if z.length_m() < self.config.new_wall_min_length_m
             || z.points < self.config.new_wall_min_points
+            || z.rms_residual_m.is_nan()
             || z.rms_residual_m > self.config.new_wall_max_rms_m
         {
             return None;
