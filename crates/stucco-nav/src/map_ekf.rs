@@ -411,7 +411,13 @@ impl WallMapEkf {
         let mut joined: Vec<Wall> = Vec::with_capacity(walls.len());
         let mut pieces: Vec<Vec<usize>> = Vec::with_capacity(walls.len());
         for (j, z) in walls.iter().enumerate() {
-            let same = joined.iter().position(|w| self.one_line(w, z));
+            let r = self.noise(z);
+            let same = joined.iter().position(|w| {
+                let delta = Vector2::new(w.d_m - z.d_m, wrap_angle(w.gamma_rad - z.gamma_rad));
+                (self.noise(w) + r)
+                    .try_inverse()
+                    .is_some_and(|inv| delta.dot(&(inv * delta)) < self.config.merge_chi2)
+            });
             match same {
                 None => {
                     joined.push(z.clone());
@@ -451,40 +457,6 @@ impl WallMapEkf {
             }
         }
         (joined, pieces)
-    }
-
-    /// Whether two walls of one scan are pieces of one line: their lines
-    /// compared where they meet (between their nearest ends), under their
-    /// fits' covariances there and the walls' own waviness. Compared at the
-    /// laser instead, two short pieces far away agree for any offset (a
-    /// wall and a radiator before it), since their angles' errors swing
-    /// their distances from the laser by metres' lever.
-    fn one_line(&self, w: &Wall, z: &Wall) -> bool {
-        let (pa, pb) = w
-            .ends
-            .iter()
-            .flat_map(|a| z.ends.iter().map(move |b| (a, b)))
-            .min_by(|x, y| (x.0 - x.1).norm().total_cmp(&(y.0 - y.1).norm()))
-            .unwrap_or((&w.ends[0], &z.ends[0]));
-        let p = nalgebra::center(pa, pb);
-        let (floor_d, floor_g) = (
-            self.config.min_sigma_d_m.powi(2),
-            self.config.min_sigma_gamma_rad.powi(2),
-        );
-        let at_p = |x: &Wall| {
-            let t = x.direction().dot(&p.coords);
-            let off = x.normal().dot(&p.coords) - x.d_m;
-            let j = Matrix2::new(-1.0, t, 0.0, 1.0);
-            let mut c = j * x.covariance * j.transpose();
-            c[(0, 0)] += floor_d;
-            c[(1, 1)] += floor_g;
-            (off, c)
-        };
-        let ((fw, cw), (fz, cz)) = (at_p(w), at_p(z));
-        let delta = Vector2::new(fw - fz, wrap_angle(w.gamma_rad - z.gamma_rad));
-        (cw + cz)
-            .try_inverse()
-            .is_some_and(|inv| delta.dot(&(inv * delta)) < self.config.merge_chi2)
     }
 
     /// The pairings of each of `seen` with the map's walls.

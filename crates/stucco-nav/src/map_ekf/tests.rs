@@ -7,6 +7,7 @@ use nalgebra::SymmetricEigen;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use std::f64::consts::FRAC_PI_2;
 
 /// A surface of the scene: from `a` to `b`, facing the side its normal
 /// (into the surface) comes from.
@@ -657,4 +658,42 @@ fn pieces_of_one_line_in_a_scan_count_once() {
         one.pose_covariance()[(1, 1)],
     );
     assert!((a - b).abs() < 0.05 * b, "two pieces {a}, one line {b}");
+}
+
+#[test]
+fn a_line_askew_along_a_wall_founds_nothing() {
+    // A known wall y = 7 (facing the robot below it) from x = 0 to 18.
+    let wall = MapWall {
+        id: 0,
+        rho_m: 7.0,
+        alpha_rad: FRAC_PI_2,
+        covariance: Matrix2::identity() * 1e-6,
+        extent_m: [-18.0, 0.0],
+        observations: 100,
+        wall_behind_scans: 0,
+        role: WallRole::Wall,
+    };
+    let map = WallMap {
+        walls: vec![wall],
+        pose: Pose2::IDENTITY,
+    };
+    let f = WallMapEkf::in_map(
+        WallMapConfig::default(),
+        &map,
+        Pose2::IDENTITY,
+        Matrix3::zeros(),
+    );
+    let p = |x: f64, y: f64| Point2::new(x, y);
+    // Tilted 5° across the wall and the radiator before it: refused.
+    let askew = (FRAC_PI_2 + 5f64.to_radians(), [p(6.7, 7.02), p(9.1, 6.82)]);
+    assert!(f.askew_of_a_wall(askew.0, &askew.1));
+    // The radiator's face itself, parallel 10 cm before the wall: a face
+    // before a wall, founded.
+    assert!(!f.askew_of_a_wall(FRAC_PI_2, &[p(7.6, 6.9), p(9.1, 6.9)]));
+    // A wall meeting it at a right angle, and one at 20° ending at it:
+    // other walls.
+    assert!(!f.askew_of_a_wall(0.0, &[p(10.0, 3.0), p(10.0, 7.0)]));
+    assert!(!f.askew_of_a_wall(FRAC_PI_2 + 20f64.to_radians(), &[p(6.0, 6.9), p(8.0, 6.2)]));
+    // Askew but well away from the wall (a table's edge in the room).
+    assert!(!f.askew_of_a_wall(askew.0, &[p(6.7, 5.02), p(9.1, 4.82)]));
 }
