@@ -13,14 +13,7 @@ use stucco_nav::{
 };
 use stucco_sim::{DynamicsConfig, Layout, OpeningKind, SimConfig, Solid, WorldSpec};
 
-use crate::study::{Axes, Compare, Study, map_run_with, record};
-
-/// A map wall lies along a surface of the world: within this angle, rad…
-const ALONG_ANGLE_RAD: f64 = 0.035;
-/// …and this distance of its midpoint from the surface's line, m…
-const ALONG_DIST_M: f64 = 0.05;
-/// …and at most this far past the surface's ends, m.
-const ALONG_OVERHANG_M: f64 = 0.3;
+use crate::study::{Drive, MATCH_ANGLE_RAD, MATCH_DIST_M, MATCH_OVERHANG_M, map_run_with, record};
 
 /// One floor mapped.
 #[derive(Clone, Debug, Serialize)]
@@ -97,14 +90,14 @@ fn stray(ekf: &WallMapEkf, faces: &[(Point2<f64>, Point2<f64>, Vector2<f64>)]) -
                 .iter()
                 .filter(|(fa, fb, n)| {
                     let mid = nalgebra::center(fa, fb);
-                    wrap_angle(w.alpha_rad - n.y.atan2(n.x)).abs() < ALONG_ANGLE_RAD
-                        && (w.in_front(&mid)).abs() < ALONG_DIST_M
+                    wrap_angle(w.alpha_rad - n.y.atan2(n.x)).abs() < MATCH_ANGLE_RAD
+                        && (w.in_front(&mid)).abs() < MATCH_DIST_M
                 })
                 .map(|(fa, fb, _)| {
                     let (a, b) = (w.along(fa), w.along(fb));
                     (
-                        a.min(b).max(w.extent_m[0]) - ALONG_OVERHANG_M,
-                        a.max(b).min(w.extent_m[1]) + ALONG_OVERHANG_M,
+                        a.min(b).max(w.extent_m[0]) - MATCH_OVERHANG_M,
+                        a.max(b).min(w.extent_m[1]) + MATCH_OVERHANG_M,
                     )
                 })
                 .filter(|(a, b)| b > a)
@@ -228,37 +221,21 @@ fn check_graph(graph: &mut RoomGraph, layout: &Layout, path: &[Point2<f64>]) -> 
 /// Maps `world` from a drive of `seconds` at `speed_mps` with `seed`.
 pub fn map_floor(world: &WorldSpec, seed: u64, speed_mps: f64, seconds: f64) -> Result<FloorRun> {
     let laser = LaserSpec::ibeo_ladar_2d();
-    let study = Study {
-        name: world.name.clone(),
-        world: Default::default(),
-        seed,
-        seeds: 1,
+    let drive = Drive {
         seconds,
         speed_mps,
-        tour: None,
-        rpe_pair_m: 1.0,
-        people: false,
         dynamics: DynamicsConfig::default(),
         odometry: OdometryConfig::default(),
-        defeature: Axes {
-            laser: laser.name.clone(),
-            range_m: Vec::new(),
-            resolution_deg: Vec::new(),
-            fov_deg: Vec::new(),
-            noise_m: Vec::new(),
-        },
-        compare: Compare {
-            scanners: Vec::new(),
-        },
+        rpe_pair_m: 1.0,
     };
     let mut world = world.clone();
     world.people.clear();
-    let rec = record(&study, &world, &laser, seed)?;
+    let rec = record(&drive, &world, &laser, seed)?;
     let layout = Layout::of(&world);
     let full = DefeaturedLaser::new(&laser, &Defeature::default())?;
     let mut graph = RoomGraph::new(RoomGraphConfig::default());
-    let (score, ekf) = map_run_with(&study, &rec, &full, &layout, seed, |ekf| {
-        graph.update(&ekf.pose(), &ekf.map());
+    let (score, ekf) = map_run_with(&drive, &rec, &full, &layout, seed, |ekf| {
+        graph.update(&ekf.pose(), ekf.walls());
     })?;
     let path: Vec<Point2<f64>> = rec.truth_path();
     let check = check_graph(&mut graph, &layout, &path);

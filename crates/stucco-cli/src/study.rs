@@ -42,14 +42,14 @@ const FOUNDING_RMS_SIGMAS: f64 = 1.25;
 /// Bumper time after which a run is given up: the tour runs into
 /// something, s.
 const MAX_BLOCKED_S: f64 = 2.0;
-/// A map wall is scored against the true wall it lies along: within this
-/// angle, rad (2°)…
-const MATCH_ANGLE_RAD: f64 = 0.035;
+/// A map wall is scored against the true wall (or, for the floor, the
+/// surface) it lies along: within this angle, rad (2°)…
+pub(crate) const MATCH_ANGLE_RAD: f64 = 0.035;
 /// …this distance of its midpoint from the true wall's line, m (a
 /// radiator's face stands further out)…
-const MATCH_DIST_M: f64 = 0.05;
+pub(crate) const MATCH_DIST_M: f64 = 0.05;
 /// …and this far past the true wall's ends at most, m.
-const MATCH_OVERHANG_M: f64 = 0.3;
+pub(crate) const MATCH_OVERHANG_M: f64 = 0.3;
 
 /// A study file (`missions/studies/*.toml`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -402,6 +402,34 @@ impl Recording {
     }
 }
 
+/// How a run is driven and mapped: what [`record`] and [`map_run`] need
+/// of a study (the floor's runs set it themselves).
+#[derive(Clone, Debug)]
+pub(crate) struct Drive {
+    /// Simulated seconds.
+    pub(crate) seconds: f64,
+    /// Speed along the tour, m/s.
+    pub(crate) speed_mps: f64,
+    /// The wheels and encoders.
+    pub(crate) dynamics: DynamicsConfig,
+    /// What the filter assumes of the odometry.
+    pub(crate) odometry: OdometryConfig,
+    /// Poses of each RPE pair are this far apart, m.
+    pub(crate) rpe_pair_m: f64,
+}
+
+impl Study {
+    fn drive(&self) -> Drive {
+        Drive {
+            seconds: self.seconds,
+            speed_mps: self.speed_mps,
+            dynamics: self.dynamics.clone(),
+            odometry: self.odometry.clone(),
+            rpe_pair_m: self.rpe_pair_m,
+        }
+    }
+}
+
 /// The world as the study drives it.
 fn study_world(study: &Study, world: &WorldSpec) -> WorldSpec {
     let mut w = world.clone();
@@ -416,7 +444,7 @@ fn study_world(study: &Study, world: &WorldSpec) -> WorldSpec {
 
 /// Drives the tour once with `laser`, keeping every sensor reading.
 pub(crate) fn record(
-    study: &Study,
+    drive: &Drive,
     world: &WorldSpec,
     laser: &LaserSpec,
     seed: u64,
@@ -424,13 +452,13 @@ pub(crate) fn record(
     let config = SimConfig {
         laser: laser.clone(),
         camera: None,
-        dynamics: study.dynamics.clone(),
+        dynamics: drive.dynamics.clone(),
         ..SimConfig::default()
     };
     let vehicle = config.vehicle.clone();
     let mut sim = Simulator::new(world, config, Some(seed));
-    let mut driver = TourDriver::new(world.tour.clone(), study.speed_mps);
-    let steps = (study.seconds / DT_S).round() as usize;
+    let mut driver = TourDriver::new(world.tour.clone(), drive.speed_mps);
+    let steps = (drive.seconds / DT_S).round() as usize;
     let mut rec = Recording {
         encoders: Vec::with_capacity(steps + 1),
         truth: vec![(sim.now(), sim.truth().drive.pose)],
@@ -514,19 +542,19 @@ fn score_map(ekf: &WallMapEkf, layout: &Layout) -> MapScore {
 /// Maps `rec` seen through `laser` from nothing: the EKF's trajectory and
 /// the odometry's at each scan, against the truth.
 fn map_run(
-    study: &Study,
+    drive: &Drive,
     rec: &Recording,
     laser: &DefeaturedLaser,
     layout: &Layout,
     noise_seed: u64,
 ) -> Result<RunScore> {
-    map_run_with(study, rec, laser, layout, noise_seed, |_| {}).map(|(score, _)| score)
+    map_run_with(drive, rec, laser, layout, noise_seed, |_| {}).map(|(score, _)| score)
 }
 
 /// [`map_run`], `after_scan` shown the filter after every scan; the filter
 /// handed back at the end.
 pub(crate) fn map_run_with(
-    study: &Study,
+    drive: &Drive,
     rec: &Recording,
     laser: &DefeaturedLaser,
     layout: &Layout,
@@ -535,7 +563,7 @@ pub(crate) fn map_run_with(
 ) -> Result<(RunScore, WallMapEkf)> {
     let vehicle = SimConfig::default().vehicle;
     let mount = vehicle.laser_mount;
-    let odo = &study.odometry;
+    let odo = &drive.odometry;
     let mut rng = ChaCha8Rng::seed_from_u64(noise_seed);
     let mut extractor = make_extractor(ExtractorKind::Rwht, &laser.spec)?;
     let Some(first) = rec.scans.first() else {
@@ -586,14 +614,14 @@ pub(crate) fn map_run_with(
         odom.push(odom_pose);
         truth.push(rec.truth_at(t));
     }
-    let pairs = Pairs::Distance(study.rpe_pair_m);
+    let pairs = Pairs::Distance(drive.rpe_pair_m);
     let (Some(rpe), Some(odom_rpe)) = (
         relative_pose_error(&est, &truth, pairs),
         relative_pose_error(&odom, &truth, pairs),
     ) else {
         anyhow::bail!(
             "the drive is shorter than one RPE pair ({} m)",
-            study.rpe_pair_m
+            drive.rpe_pair_m
         );
     };
     let score = RunScore {
@@ -719,16 +747,17 @@ pub fn run_study(job: &StudyJob, progress: impl Fn(usize, usize) + Sync) -> Resu
     let done = std::sync::atomic::AtomicUsize::new(0);
     // Seed by seed (two at a time on two cores): each preset driven once,
     // then every setting of it mapped, so at most a few drives are kept.
+    let drive = study.drive();
     let per_seed: Vec<Vec<RunScore>> = (0..seeds)
         .into_par_iter()
         .map(|k| -> Result<Vec<RunScore>> {
             let seed = study.seed.wrapping_add(k);
             let mut scores = Vec::with_capacity(settings.len());
             for (p, preset) in presets.iter().enumerate() {
-                let rec = record(&study, &world, preset, seed)?;
+                let rec = record(&drive, &world, preset, seed)?;
                 for (i, s) in settings.iter().enumerate().filter(|(_, s)| s.preset == p) {
                     let noise_seed = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i as u64;
-                    let score = map_run(&study, &rec, &s.laser, &layout, noise_seed).with_context(
+                    let score = map_run(&drive, &rec, &s.laser, &layout, noise_seed).with_context(
                         || format!("seed {seed}, {} {}", s.laser.spec.name, s.label),
                     )?;
                     scores.push((i, score));

@@ -1,6 +1,6 @@
 //! The room-and-door map (paper 002, the room graph): rooms as nodes, the
 //! doors between them as edges, built as the robot drives through a floor
-//! on the map of walls ([`WallMap`]).
+//! on the map of walls ([`crate::WallMap`]).
 //!
 //! A room is the rectangle of building walls around the robot, measured in
 //! the floor's own frame (the walls' dominant direction): on each side the
@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use stucco_core::{Pose2, wrap_angle};
 
 use crate::error::NavError;
-use crate::wall_map::{MapWall, WallMap};
+use crate::wall_map::{MapWall, building};
 
 /// Settings of the room graph.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -305,7 +305,7 @@ impl RoomGraph {
 
     /// The rectangle of building walls around `p` (map frame), `[x0, x1,
     /// y0, y1]` in the floor's frame; `None` while a side has no wall.
-    fn rectangle(&self, map: &WallMap, p: &Point2<f64>) -> Option<[f64; 4]> {
+    fn rectangle(&self, walls: &[MapWall], p: &Point2<f64>) -> Option<[f64; 4]> {
         let phi = self.frame_rad?;
         let q = self.to_floor(p);
         let cfg = &self.config;
@@ -317,8 +317,7 @@ impl RoomGraph {
                 phi.sin() * out.x + phi.cos() * out.y,
             );
             // Pieces of wall on this side that face the robot.
-            let pieces: Vec<&MapWall> = map
-                .building_walls()
+            let pieces: Vec<&MapWall> = building(walls)
                 .filter(|w| {
                     w.normal().dot(&dir_map) > cfg.parallel_rad.cos() && w.in_front(p) > 0.0
                 })
@@ -372,9 +371,9 @@ impl RoomGraph {
 
     /// The floor's orientation: the walls' dominant direction (modulo a
     /// quarter turn), weighted by their length.
-    fn orientation(map: &WallMap) -> Option<f64> {
+    fn orientation(walls: &[MapWall]) -> Option<f64> {
         let (mut s, mut c, mut total) = (0.0, 0.0, 0.0);
-        for w in map.building_walls() {
+        for w in building(walls) {
             let l = w.length_m();
             s += l * (4.0 * w.alpha_rad).sin();
             c += l * (4.0 * w.alpha_rad).cos();
@@ -383,16 +382,17 @@ impl RoomGraph {
         (total > 0.0).then(|| wrap_angle(s.atan2(c) / 4.0))
     }
 
-    /// Takes the robot's pose and the map as they are after a scan.
-    pub fn update(&mut self, pose: &Pose2, map: &WallMap) -> Option<RoomEvent> {
+    /// Takes the robot's pose and the map's walls as they are after a scan
+    /// ([`crate::WallMapEkf::walls`]: read in place, not copied).
+    pub fn update(&mut self, pose: &Pose2, walls: &[MapWall]) -> Option<RoomEvent> {
         if self.current.is_none() {
             // The frame is fixed once the first room is found: rooms are
             // compared in it.
-            self.frame_rad = Self::orientation(map);
+            self.frame_rad = Self::orientation(walls);
         }
         let p = pose.position();
         let q = self.to_floor(&p);
-        let rect = self.rectangle(map, &p);
+        let rect = self.rectangle(walls, &p);
         let keep = self.config.keep;
         let Some(cur) = self.current else {
             let rect = rect?;
@@ -645,6 +645,7 @@ impl RoomGraph {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use crate::wall_map::WallMap;
     use crate::wall_map::WallRole;
     use nalgebra::Matrix2;
 
@@ -714,7 +715,7 @@ mod tests {
             for k in 0..=steps {
                 let p = a + d * (k as f64 / steps as f64);
                 let pose = Pose2::new(p.x, p.y, d.y.atan2(d.x));
-                events.extend(graph.update(&pose, map));
+                events.extend(graph.update(&pose, &map.walls));
             }
         }
         events

@@ -102,8 +102,14 @@ pub struct WallMap {
 impl WallMap {
     /// The walls of the building (not what stands in front of them).
     pub fn building_walls(&self) -> impl Iterator<Item = &MapWall> {
-        self.walls.iter().filter(|w| w.role == WallRole::Wall)
+        building(&self.walls)
     }
+}
+
+/// The walls of the building among `walls` (not what stands in front of
+/// them).
+pub(crate) fn building(walls: &[MapWall]) -> impl Iterator<Item = &MapWall> {
+    walls.iter().filter(|w| w.role == WallRole::Wall)
 }
 
 #[cfg(test)]
