@@ -10,6 +10,7 @@ mod link;
 mod missions;
 mod plastering;
 mod replay_real_logs;
+mod rooms;
 mod study;
 mod walls_on_real_logs;
 

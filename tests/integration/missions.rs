@@ -195,6 +195,55 @@ fn a_bad_task_names_file_line_and_key() {
     );
 }
 
+/// A floor plan's fault is refused with the file, the line and the
+/// field: a door that lies in no wall of its rooms, a room the plan does
+/// not have in `go_to_room` or `[start]`, a plan with a room size given
+/// twice.
+#[test]
+fn a_bad_floor_plan_names_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("plan.toml");
+    let head = "name = \"x\"\nworld = \"w.toml\"\nseed = 1\n\n[start]\nroom = \"hall\"\nroom_sigma_m = 0.05\n\n\
+        [[room]]\nname = \"hall\"\norigin_m = [0.0, 0.0]\nsize_m = [10.0, 3.0]\n\n\
+        [[room]]\nname = \"office\"\norigin_m = [0.0, 3.15]\nsize_m = [5.0, 4.0]\n\n";
+    let load = |text: String| {
+        std::fs::write(&path, text).unwrap();
+        format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err())
+    };
+    let task = "[[task]]\ntask = \"go_to_room\"\nroom = \"office\"\n";
+    // The door 1 m south of the wall between the rooms (line 21).
+    let err = load(format!(
+        "{head}[[door]]\nrooms = [\"hall\", \"office\"]\nat_m = [2.5, 2.0]\nwidth_m = 1.0\n\n{task}"
+    ));
+    assert!(
+        err.contains("plan.toml:21") && err.contains("at_m") && err.contains("[[door]] 1"),
+        "{err}"
+    );
+    let door = "[[door]]\nrooms = [\"hall\", \"office\"]\nat_m = [2.5, 3.075]\nwidth_m = 1.0\n\n";
+    let err = load(format!(
+        "{head}{door}[[task]]\ntask = \"go_to_room\"\nroom = \"kitchen\"\n"
+    ));
+    assert!(
+        err.contains("plan.toml:26") && err.contains("kitchen"),
+        "{err}"
+    );
+    let err = load(format!("{head}{door}{task}").replace("room = \"hall\"", "room = \"lobby\""));
+    assert!(
+        err.contains("plan.toml:6") && err.contains("lobby"),
+        "{err}"
+    );
+    let err =
+        load(format!("{head}{door}{task}").replace("[start]\n", "[start]\nroom_m = [10.0, 3.0]\n"));
+    assert!(
+        err.contains("plan.toml:6") && err.contains("room_m"),
+        "{err}"
+    );
+    // Written right, it loads.
+    std::fs::write(&path, format!("{head}{door}{task}")).unwrap();
+    let m = stucco_cli::Mission::load(&path).unwrap();
+    assert_eq!(m.floor_plan().unwrap().route(0, 1), Some(vec![0]));
+}
+
 /// A plastering pass along the reference room's south wall, past a
 /// radiator, after mapping the room: the true standoff holds within 5 mm
 /// over the whole pass.

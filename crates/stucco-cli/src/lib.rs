@@ -53,7 +53,7 @@ pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
 pub use stucco_link::{Denial, Faults, FaultyRelay, LinkConfig, Mode as LinkMode, router};
 pub use study::{Axes, Axis, Compare, SettingReport, Study, StudyJob, StudyReport, run_study};
 pub use task_mission::{
-    Checkpoint, DoorReport, MissionReport, MissionSummary, TaskMissionJob, TaskReport,
+    Checkpoint, DoorReport, MissionReport, MissionSummary, RoomChange, TaskMissionJob, TaskReport,
     run_task_mission, write_atomic,
 };
 pub use walls::{

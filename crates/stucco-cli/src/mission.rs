@@ -9,7 +9,9 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use stucco_control::GainSchedule;
 use stucco_core::Pose2;
-use stucco_mission::{Executive, ExecutiveConfig, SafetyConfig, TaskSpec};
+use stucco_mission::{
+    Executive, ExecutiveConfig, FloorPlan, PlanDoor, PlanRoom, SafetyConfig, TaskSpec,
+};
 use stucco_sim::{SimConfig, WorldSpec};
 
 /// Input that cannot be used as it is (a mission file, a checkpoint):
@@ -55,6 +57,14 @@ pub struct Mission {
     /// The tasks, in order (`[[task]]`).
     #[serde(default, rename = "task")]
     pub tasks: Vec<TaskSpec>,
+    /// The building's rooms as its plan draws them (`[[room]]`), for
+    /// `go_to_room` and for the robot's frame to follow it from room to
+    /// room.
+    #[serde(default, rename = "room")]
+    pub rooms: Vec<PlanRoom>,
+    /// The plan's doors between those rooms (`[[door]]`).
+    #[serde(default, rename = "door")]
+    pub doors: Vec<PlanDoor>,
     /// A task mission fails when it takes longer than this, simulated s.
     #[serde(default = "time_limit")]
     pub time_limit_s: f64,
@@ -78,9 +88,14 @@ fn time_limit() -> f64 {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StartKnowledge {
-    /// The room's size as a plan gives it, m.
-    pub room_m: [f64; 2],
-    /// How far off that may be, m (σ).
+    /// The room's size as a plan gives it, m (without a floor plan).
+    #[serde(default)]
+    pub room_m: Option<[f64; 2]>,
+    /// The floor plan's room the robot starts in (with a floor plan: the
+    /// size is the plan's).
+    #[serde(default)]
+    pub room: Option<String>,
+    /// How far off the sizes (and the plan's doors) may be, m (σ).
     pub room_sigma_m: f64,
     /// How far off the start position may be, m (σ).
     #[serde(default = "start_sigma")]
@@ -94,15 +109,15 @@ fn start_sigma() -> f64 {
 impl StartKnowledge {
     /// The room filter's first state for a robot put at `at` (room frame):
     /// off by the start's uncertainty (`pose_sigma_m` along x and against
-    /// y, 0.01 rad in heading), the room as planned.
-    pub fn filter_start(&self, at: &Pose2) -> SVector<f64, 5> {
+    /// y, 0.01 rad in heading), the room `size_m` as planned.
+    pub fn filter_start(&self, at: &Pose2, size_m: [f64; 2]) -> SVector<f64, 5> {
         let off = self.pose_sigma_m;
         SVector::<f64, 5>::new(
             at.x + off,
             at.y - off,
             at.theta + 0.01,
-            self.room_m[0],
-            self.room_m[1],
+            size_m[0],
+            size_m[1],
         )
     }
 }
@@ -226,7 +241,28 @@ impl Mission {
                 line_of(&text, "spray", field)
             );
         }
+        let plan = mission.checked_plan(&text, path)?;
+        if let (Some(plan), Some(name)) =
+            (&plan, mission.start.as_ref().and_then(|s| s.room.as_ref()))
+            && plan.room(name).is_none()
+        {
+            bad!(
+                "{}:{}: [start] room: no room {name:?} on the floor plan",
+                path.display(),
+                line_of(&text, "start", "room")
+            );
+        }
         for (i, task) in mission.tasks.iter().enumerate() {
+            if let TaskSpec::GoToRoom { room, .. } = task
+                && plan.as_ref().is_none_or(|p| p.room(room).is_none())
+            {
+                bad!(
+                    "{}:{}: task {} (go_to_room): room: no room {room:?} on the floor plan",
+                    path.display(),
+                    line_of_array(&text, "task", i, "room"),
+                    i + 1
+                );
+            }
             if matches!(task, TaskSpec::Plaster { .. }) && mission.spray.is_none() {
                 bad!(
                     "{}:{}: task {} (plaster): the mission has no [spray] table (the tool and the coat)",
@@ -246,6 +282,49 @@ impl Mission {
             }
         }
         Ok(mission)
+    }
+
+    /// The floor plan, checked (a door must lie in a wall of each of its
+    /// rooms): `None` when the mission has none.
+    fn checked_plan(&self, text: &str, path: &Path) -> Result<Option<FloorPlan>> {
+        if self.rooms.is_empty() && self.doors.is_empty() {
+            return Ok(None);
+        }
+        match FloorPlan::new(self.rooms.clone(), self.doors.clone()) {
+            Ok(plan) => Ok(Some(plan)),
+            Err(e) => {
+                let which = match self.rooms.get(e.index).filter(|_| e.table == "room") {
+                    Some(r) => format!("{} ({:?})", e.index + 1, r.name),
+                    None => (e.index + 1).to_string(),
+                };
+                bad!(
+                    "{}:{}: [[{}]] {which}: {}: {}",
+                    path.display(),
+                    line_of_array(text, e.table, e.index, e.field),
+                    e.table,
+                    e.field,
+                    e.why
+                )
+            }
+        }
+    }
+
+    /// The floor plan (`[[room]]`, `[[door]]`), when the mission has one.
+    pub fn floor_plan(&self) -> Option<FloorPlan> {
+        FloorPlan::new(self.rooms.clone(), self.doors.clone()).ok()
+    }
+
+    /// The size of the room the robot starts in, as planned, and the
+    /// plan's room it is, if there is a plan.
+    pub fn start_room(&self) -> Option<([f64; 2], Option<usize>)> {
+        let s = self.start.as_ref()?;
+        match (self.floor_plan(), &s.room) {
+            (Some(plan), Some(name)) => {
+                let room = plan.room(name)?;
+                Some((plan.rooms()[room].size_m, Some(room)))
+            }
+            _ => Some((s.room_m?, None)),
+        }
     }
 
     /// The first value out of its range: its table, its key and why.
@@ -281,8 +360,24 @@ impl Mission {
         }
         if let Some(s) = &self.start {
             let t = "start";
-            if !size(&s.room_m) {
-                return Some((t, "room_m", "sides must be positive"));
+            match (&s.room_m, &s.room, self.rooms.is_empty()) {
+                (Some(r), None, true) if !size(r) => {
+                    return Some((t, "room_m", "sides must be positive"));
+                }
+                (Some(_), None, true) => {}
+                (None, _, true) => {
+                    return Some((t, "room_m", "the room's size as planned (no floor plan)"));
+                }
+                (_, None, false) => {
+                    return Some((t, "room", "the floor plan's room the robot starts in"));
+                }
+                (Some(_), Some(_), false) => {
+                    return Some((t, "room_m", "the floor plan gives the room's size"));
+                }
+                (_, Some(_), true) => {
+                    return Some((t, "room", "no floor plan ([[room]], [[door]])"));
+                }
+                (None, Some(_), false) => {}
             }
             if !(s.room_sigma_m.is_finite() && s.room_sigma_m >= 0.0) {
                 return Some((t, "room_sigma_m", "must not be negative"));
@@ -336,6 +431,7 @@ impl Mission {
                 safety: self.failsafe.clone(),
                 unattended,
                 spray: self.spray.clone(),
+                floor: self.floor_plan(),
             },
             self.tasks.clone(),
         )
@@ -351,13 +447,19 @@ impl Mission {
 
 /// The line of `key` in the `n`-th `[[task]]` table, or of its header.
 fn line_of_task(text: &str, n: usize, key: &str) -> usize {
+    line_of_array(text, "task", n, key)
+}
+
+/// The line of `key` in the `n`-th `[[table]]`, or of its header.
+fn line_of_array(text: &str, table: &str, n: usize, key: &str) -> usize {
+    let header_text = format!("[[{table}]]");
     let mut seen = 0;
     let mut header = 0;
     let mut inside = false;
     for (i, raw) in text.lines().enumerate() {
         let line = raw.trim();
         if line.starts_with('[') {
-            inside = line == "[[task]]" && {
+            inside = line == header_text && {
                 seen += 1;
                 seen == n + 1
             };

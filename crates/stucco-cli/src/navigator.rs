@@ -6,7 +6,7 @@
 use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_control::Limiter;
 use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, ToolCommand, Twist2};
-use stucco_mission::{DoorEstimate, Estimate, WallGeometry, WallName, WindowEstimate};
+use stucco_mission::{DoorEstimate, Estimate, FloorPlan, WallGeometry, WallName, WindowEstimate};
 use stucco_nav::{
     DoorConfig, DoorOpening, OdometryConfig, ProfilePose, RoomConfig, RoomCovariance, RoomEkf,
     RoomEkfConfig, RoomSearch, RoomState, ScanPoints, Wall, Window, WindowConfig, WindowFinder,
@@ -19,10 +19,11 @@ use stucco_sim::{Layout, SimConfig, Simulator, SprayerSpec, WorldSpec};
 /// Control period, s.
 pub const DT_S: f64 = 0.02;
 
-/// A simulated robot navigating a rectangular room with the room filter.
+/// A simulated robot navigating a building room by room with the room
+/// filter: one room's frame at a time, moved into the next room through
+/// a door of the floor plan when the mission has one.
 pub struct Navigator {
     sim: Simulator,
-    ekf: RoomEkf,
     search: RoomSearch,
     limiter: Limiter,
     odometry: OdometryConfig,
@@ -31,20 +32,32 @@ pub struct Navigator {
     doors: DoorConfig,
     /// The last scan's echoes in the robot's frame.
     obstacles: Vec<Point2<f64>>,
-    /// Openings seen where the filter knows no door, not yet trusted.
-    door_candidates: Vec<DoorCandidate>,
-    /// The width of each door in the filter, m, when measured.
-    door_widths: Vec<Option<f64>>,
     /// Whether openings seen often enough become doors of the filter.
     discover_doors: bool,
-    /// Scans each room wall has been used in.
-    walls_seen: [usize; 4],
-    /// Camera profiles each room wall has been measured in.
-    camera_walls_seen: [usize; 4],
     /// Scans taken in.
     scans: u64,
     /// The range camera, if the robot has one.
     camera: Option<CameraSpec>,
+    /// What the robot knows of the room it is in.
+    room: RoomView,
+    /// The floor plan, the room of it the robot is in, and how far off
+    /// the plan's sizes and doors may be (m, σ).
+    plan: Option<(FloorPlan, usize, f64)>,
+    /// What the robot learnt of the rooms it has left.
+    parked: std::collections::BTreeMap<usize, RoomView>,
+}
+
+/// What the robot knows of one room, in the room's frame.
+struct RoomView {
+    ekf: RoomEkf,
+    /// Openings seen where the filter knows no door, not yet trusted.
+    door_candidates: Vec<DoorCandidate>,
+    /// What is known of each door in the filter besides its place.
+    door_info: Vec<KnownDoor>,
+    /// Scans each room wall has been used in.
+    walls_seen: [usize; 4],
+    /// Camera profiles each room wall has been measured in.
+    camera_walls_seen: [usize; 4],
     /// Windows found in each room wall by the camera.
     windows: [WindowFinder; 4],
     /// The wall the camera looked at last.
@@ -55,6 +68,38 @@ pub struct Navigator {
     floor: std::collections::BTreeMap<(i64, i64), u32>,
     /// What stands on the floor, as of the last scan.
     floor_boxes: Vec<Obstacle>,
+}
+
+/// A door of the room filter: its width when measured, the door of the
+/// floor plan it is.
+#[derive(Clone, Copy, Debug)]
+struct KnownDoor {
+    width_m: Option<f64>,
+    plan_door: Option<usize>,
+}
+
+impl RoomView {
+    /// Puts a door into the filter's state; returns its index there.
+    fn add_door(&mut self, wall: usize, position_m: f64, sigma_m: f64, info: KnownDoor) -> usize {
+        self.door_info.push(info);
+        self.ekf.add_door(wall, position_m, sigma_m).index
+    }
+
+    /// A room known only by its filter's first state.
+    fn new(ekf: RoomEkf) -> Self {
+        RoomView {
+            ekf,
+            door_candidates: Vec::new(),
+            door_info: Vec::new(),
+            walls_seen: [0; 4],
+            camera_walls_seen: [0; 4],
+            windows: std::array::from_fn(|_| WindowFinder::new(WindowConfig::default())),
+            camera_wall: None,
+            ceiling_m: std::collections::VecDeque::new(),
+            floor: std::collections::BTreeMap::new(),
+            floor_boxes: Vec::new(),
+        }
+    }
 }
 
 /// Ceiling heights kept for the median.
@@ -143,31 +188,24 @@ impl Navigator {
         ));
         Ok(Navigator {
             sim: Simulator::new(world, cfg, Some(seed)),
-            ekf: RoomEkf::new(
-                RoomEkfConfig::new(odometry.clone(), vehicle.laser_mount),
-                x0,
-                p0,
-                Stamp::ZERO,
-            ),
             search: RoomSearch::new(RoomConfig::default())?,
             limiter: Limiter::new(&vehicle),
-            odometry,
+            odometry: odometry.clone(),
             mount: vehicle.laser_mount,
             samples: Vec::new(),
             doors: DoorConfig::for_laser(&cfg_laser),
             obstacles: Vec::new(),
-            door_candidates: Vec::new(),
-            door_widths: Vec::new(),
             discover_doors: false,
-            walls_seen: [0; 4],
-            camera_walls_seen: [0; 4],
             scans: 0,
             camera,
-            windows: std::array::from_fn(|_| WindowFinder::new(WindowConfig::default())),
-            camera_wall: None,
-            ceiling_m: std::collections::VecDeque::new(),
-            floor: std::collections::BTreeMap::new(),
-            floor_boxes: Vec::new(),
+            room: RoomView::new(RoomEkf::new(
+                RoomEkfConfig::new(odometry, vehicle.laser_mount),
+                x0,
+                p0,
+                Stamp::ZERO,
+            )),
+            plan: None,
+            parked: std::collections::BTreeMap::new(),
         })
     }
 
@@ -188,10 +226,10 @@ impl Navigator {
 
     /// The ceiling's height as the camera measured it (median), m.
     pub fn ceiling_height(&self) -> Option<f64> {
-        if self.ceiling_m.len() < 20 {
+        if self.room.ceiling_m.len() < 20 {
             return None;
         }
-        let mut v: Vec<f64> = self.ceiling_m.iter().copied().collect();
+        let mut v: Vec<f64> = self.room.ceiling_m.iter().copied().collect();
         v.sort_by(f64::total_cmp);
         Some(v[v.len() / 2])
     }
@@ -200,6 +238,7 @@ impl Navigator {
     /// finding echoes off the walls (connected cells, 8-neighbours).
     pub fn floor_obstacles(&self) -> Vec<Obstacle> {
         let cells: Vec<(i64, i64)> = self
+            .room
             .floor
             .iter()
             .filter(|(_, n)| **n >= FLOOR_HITS)
@@ -231,7 +270,7 @@ impl Navigator {
             let mut max = [(hi.0 + 1) as f64 * f, (hi.1 + 1) as f64 * f];
             // The laser sees a face: what lies between it and a wall less
             // than a metre behind is taken as part of it.
-            let [xs, ys] = self.ekf.now().0.fixed_rows::<2>(3).into();
+            let [xs, ys] = self.room.ekf.now().0.fixed_rows::<2>(3).into();
             if min[0] < 1.0 {
                 min[0] = 0.0;
             }
@@ -311,7 +350,7 @@ impl Navigator {
                 (p.x / FLOOR_CELL_M).floor() as i64,
                 (p.y / FLOOR_CELL_M).floor() as i64,
             );
-            *self.floor.entry(c).or_insert(0) += 1;
+            *self.room.floor.entry(c).or_insert(0) += 1;
         }
     }
 
@@ -343,20 +382,22 @@ impl Navigator {
 
     /// The estimate as the executive reads it.
     pub fn mission_estimate(&self) -> Estimate {
-        let (x, p) = self.ekf.now();
+        let (x, p) = self.room.ekf.now();
         let xy = Matrix2::new(p[(0, 0)], p[(0, 1)], p[(1, 0)], p[(1, 1)]);
         let worst = xy.symmetric_eigenvalues().max().max(0.0);
         let doors = self
+            .room
             .ekf
             .doors()
             .iter()
-            .zip(&self.door_widths)
-            .filter_map(|(d, &width_m)| {
+            .zip(&self.room.door_info)
+            .filter_map(|(d, info)| {
                 Some(DoorEstimate {
                     wall: WallName::from_index(d.wall)?,
                     position_m: x[d.index],
-                    width_m,
+                    width_m: info.width_m,
                     sigma_m: p[(d.index, d.index)].max(0.0).sqrt(),
+                    plan_door: info.plan_door,
                 })
             })
             .collect();
@@ -367,7 +408,7 @@ impl Navigator {
             heading_sigma_rad: p[(2, 2)].max(0.0).sqrt(),
             room_m: [x[3], x[4]],
             room_sigma_m: [p[(3, 3)].max(0.0).sqrt(), p[(4, 4)].max(0.0).sqrt()],
-            walls_seen: self.walls_seen,
+            walls_seen: self.room.walls_seen,
             doors,
             height_m: self.ceiling_height().unwrap_or(2.6),
             windows: self
@@ -379,30 +420,150 @@ impl Navigator {
                     sill_head_m: w.sill_head_m,
                 })
                 .collect(),
-            obstacles: self.floor_boxes.clone(),
+            obstacles: self.room.floor_boxes.clone(),
+            room: self.plan.as_ref().map(|(_, room, _)| *room),
         }
     }
 
     /// The filter's estimate now.
     pub fn estimate(&self) -> DVector<f64> {
-        self.ekf.now().0
+        self.room.ekf.now().0
     }
 
     /// Puts a door into the filter's state (see [`RoomEkf::add_door`]).
     pub fn add_door(&mut self, wall: usize, position_m: f64, sigma_m: f64) -> usize {
-        self.add_known_door(wall, position_m, None, sigma_m)
+        let info = KnownDoor {
+            width_m: None,
+            plan_door: None,
+        };
+        self.room.add_door(wall, position_m, sigma_m, info)
     }
 
-    /// Puts a door `width_m` wide (if known) into the filter's state.
-    pub fn add_known_door(
+    /// Puts a door known before (a checkpoint's) into the filter's state.
+    pub fn add_known_door(&mut self, d: &DoorEstimate) -> usize {
+        let info = KnownDoor {
+            width_m: d.width_m,
+            plan_door: d.plan_door,
+        };
+        self.room
+            .add_door(d.wall.index(), d.position_m, d.sigma_m, info)
+    }
+
+    /// Gives the robot the building's floor plan, the robot standing in
+    /// its room `room` (the frame its filter keeps); the room's doors on
+    /// the plan that the filter does not hold yet are put in, `sigma_m`
+    /// uncertain (how far off the plan may be, the same for the sizes of
+    /// the rooms the robot enters).
+    pub fn follow_plan(&mut self, plan: FloorPlan, room: usize, sigma_m: f64) {
+        add_plan_doors(&mut self.room, &plan, room, sigma_m);
+        self.plan = Some((plan, room, sigma_m));
+    }
+
+    /// The floor plan's room the robot is in, by name.
+    pub fn room_name(&self) -> Option<&str> {
+        let (plan, room, _) = self.plan.as_ref()?;
+        plan.rooms().get(*room).map(|r| r.name.as_str())
+    }
+
+    /// Moves the robot's frame into the room beyond `door` of the floor
+    /// plan, once the robot has gone through it: the pose carried over
+    /// with the door as the anchor between the two frames (its place as
+    /// the filter knows it here, as the plan has it there), its
+    /// uncertainty grown by the door's and the plan's. What the robot
+    /// learnt of the room it leaves is kept for when it comes back; a room
+    /// entered for the first time starts from the plan. Refused (nothing
+    /// changes) when the estimate is not beyond the door.
+    pub fn enter_through(&mut self, door: usize) -> Result<(), String> {
+        let Some((plan, room, sigma)) = self.plan.take() else {
+            return Err("no floor plan: the robot has no room to enter".to_owned());
+        };
+        let result = self.move_frame(&plan, room, sigma, door);
+        let next = *result.as_ref().unwrap_or(&room);
+        self.plan = Some((plan, next, sigma));
+        result.map(|_| ())
+    }
+
+    /// [`Navigator::enter_through`] with the plan taken out: the room
+    /// entered.
+    fn move_frame(
         &mut self,
-        wall: usize,
-        position_m: f64,
-        width_m: Option<f64>,
-        sigma_m: f64,
-    ) -> usize {
-        self.door_widths.push(width_m);
-        self.ekf.add_door(wall, position_m, sigma_m).index
+        plan: &FloorPlan,
+        room: usize,
+        sigma: f64,
+        door: usize,
+    ) -> Result<usize, String> {
+        let name = |r: usize| plan.rooms()[r].name.clone();
+        let side = plan
+            .side(door, room)
+            .ok_or_else(|| format!("door {door} of the plan is not a door of {}", name(room)))?;
+        let (x, p) = self.room.ekf.now();
+        let pose = Pose2::new(x[0], x[1], x[2]);
+        let size = [x[3], x[4]];
+        let known = self
+            .room
+            .ekf
+            .doors()
+            .iter()
+            .zip(&self.room.door_info)
+            .find(|(_, i)| i.plan_door == Some(door))
+            .map(|(d, _)| (x[d.index], p[(d.index, d.index)].max(0.0)));
+        let (along, door_var) = known.unwrap_or((side.along_m, sigma * sigma));
+        let inside = WallGeometry::of(side.wall, size).distance(&pose.position().coords);
+        if inside >= 0.0 {
+            return Err(format!(
+                "the robot is {inside:.2} m inside {} from its door {door}: not beyond it",
+                name(room)
+            ));
+        }
+        let (next, at) = plan
+            .transfer(door, room, &pose, along, size)
+            .ok_or_else(|| format!("door {door} of the plan leads nowhere from {}", name(room)))?;
+        // The pose's own uncertainty, the door's place here and the plan's
+        // place of it there.
+        let mut p0 = RoomCovariance::zeros();
+        p0.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&p.fixed_view::<3, 3>(0, 0));
+        p0[(0, 0)] += door_var + sigma * sigma;
+        p0[(1, 1)] += door_var + sigma * sigma;
+        let config = RoomEkfConfig::new(self.odometry.clone(), self.mount);
+        let stamp = self.sim.now();
+        let entered = match self.parked.remove(&next) {
+            // Back in a room: what was learnt of it stays, the pose is new.
+            Some(mut view) => {
+                let (vx, vp) = view.ekf.now();
+                p0.fixed_view_mut::<2, 2>(3, 3)
+                    .copy_from(&vp.fixed_view::<2, 2>(3, 3));
+                let x0 = RoomState::new(at.x, at.y, at.theta, vx[3], vx[4]);
+                let doors: Vec<(usize, f64, f64)> = view
+                    .ekf
+                    .doors()
+                    .iter()
+                    .map(|d| (d.wall, vx[d.index], vp[(d.index, d.index)].max(0.0).sqrt()))
+                    .collect();
+                view.ekf = RoomEkf::new(config, x0, p0, stamp);
+                let info = std::mem::take(&mut view.door_info);
+                for ((wall, position, sigma), info) in doors.into_iter().zip(info) {
+                    view.add_door(wall, position, sigma, info);
+                }
+                view
+            }
+            None => {
+                let size = plan.rooms()[next].size_m;
+                p0[(3, 3)] = sigma * sigma;
+                p0[(4, 4)] = sigma * sigma;
+                let x0 = RoomState::new(at.x, at.y, at.theta, size[0], size[1]);
+                let mut view = RoomView::new(RoomEkf::new(config, x0, p0, stamp));
+                add_plan_doors(&mut view, plan, next, sigma);
+                view
+            }
+        };
+        let left = std::mem::replace(&mut self.room, entered);
+        self.parked.insert(room, left);
+        // The new filter's dead reckoning starts from the last sample.
+        if let Some(last) = self.samples.last() {
+            self.room.ekf.odometry(*last);
+        }
+        Ok(next)
     }
 
     /// The true pose (for scoring only).
@@ -428,7 +589,7 @@ impl Navigator {
         self.sim.command(cmd);
         let r = self.sim.advance(DT_S);
         for e in &r.encoders {
-            self.ekf.odometry(*e);
+            self.room.ekf.odometry(*e);
             self.samples.push(*e);
         }
         for scan in &r.scans {
@@ -444,8 +605,8 @@ impl Navigator {
                 .map(|room| room.walls.into_iter().flatten().collect())
                 .unwrap_or_default();
             let doors = find_doors_moving(scan, &twist, &walls, &self.doors);
-            let update = self.ekf.scan(scan.stamp, &walls, &doors);
-            for (q, seen) in self.walls_seen.iter_mut().enumerate() {
+            let update = self.room.ekf.scan(scan.stamp, &walls, &doors);
+            for (q, seen) in self.room.walls_seen.iter_mut().enumerate() {
                 *seen += usize::from(update.used.contains(&q));
             }
             if self.discover_doors {
@@ -456,7 +617,7 @@ impl Navigator {
             }
             let robot_twist = twist_at(&self.samples, scan.stamp, &self.odometry);
             self.note_floor(&pts, &robot_twist, scan.stamp);
-            self.floor_boxes = self.floor_obstacles();
+            self.room.floor_boxes = self.floor_obstacles();
             self.obstacles.clear();
             self.obstacles.extend(
                 pts.points()
@@ -482,7 +643,7 @@ impl Navigator {
         WallName::ALL
             .iter()
             .flat_map(|&w| {
-                self.windows[w.index()]
+                self.room.windows[w.index()]
                     .windows()
                     .iter()
                     .map(move |x| (w, *x))
@@ -517,25 +678,25 @@ impl Navigator {
             })
         });
         let now = target.map(|t| t.0);
-        if let Some(last) = self.camera_wall
+        if let Some(last) = self.room.camera_wall
             && now != Some(last)
         {
-            self.windows[last].end_pass();
+            self.room.windows[last].end_pass();
         }
-        self.camera_wall = now;
+        self.room.camera_wall = now;
         if let Some((w, pose)) = target {
             self.camera_wall_update(profile, w, &pose, &est);
             // Rays that end short of the wall, looking up, hit the ceiling.
             for (el, r) in profile.elevations_rad.iter().zip(&profile.ranges_m) {
                 let across = r * el.cos() * pose.direction.x;
                 if *el > 0.3 && r.is_finite() && across < pose.distance_m - 0.1 {
-                    self.ceiling_m.push_back(cam_height_m + r * el.sin());
-                    if self.ceiling_m.len() > CEILING_SAMPLES {
-                        self.ceiling_m.pop_front();
+                    self.room.ceiling_m.push_back(cam_height_m + r * el.sin());
+                    if self.room.ceiling_m.len() > CEILING_SAMPLES {
+                        self.room.ceiling_m.pop_front();
                     }
                 }
             }
-            self.windows[w].add(profile, &pose);
+            self.room.windows[w].add(profile, &pose);
         }
     }
 
@@ -555,7 +716,7 @@ impl Navigator {
     ) {
         // Walls the laser sees are left to it: the camera only stands in
         // for it where furniture hides a wall from the laser's plane.
-        if self.walls_seen[wall] >= LASER_SEES_WALL {
+        if self.room.walls_seen[wall] >= LASER_SEES_WALL {
             return;
         }
         let top = est.height_m - CAMERA_WALL_BAND_M[1];
@@ -594,9 +755,9 @@ impl Navigator {
             rms_residual_m: spread / 1.35,
             ends: [Point2::origin(), Point2::origin()],
         };
-        let update = self.ekf.scan(profile.stamp, &[measured], &[]);
+        let update = self.room.ekf.scan(profile.stamp, &[measured], &[]);
         for q in update.used {
-            self.camera_walls_seen[q] += 1;
+            self.room.camera_walls_seen[q] += 1;
         }
     }
 
@@ -628,6 +789,7 @@ impl Navigator {
                 continue;
             }
             match self
+                .room
                 .door_candidates
                 .iter_mut()
                 .find(|d| d.wall == q && (d.position_m - at).abs() < 0.3)
@@ -638,7 +800,7 @@ impl Navigator {
                     d.width_m = (d.width_m * n + o.width_m) / (n + 1.0);
                     d.sightings += 1;
                 }
-                None => self.door_candidates.push(DoorCandidate {
+                None => self.room.door_candidates.push(DoorCandidate {
                     wall: q,
                     position_m: at,
                     width_m: o.width_m,
@@ -646,13 +808,31 @@ impl Navigator {
                 }),
             }
         }
-        let (ready, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut self.door_candidates)
+        let (ready, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut self.room.door_candidates)
             .into_iter()
             .partition(|d| d.sightings >= DOOR_SIGHTINGS);
-        self.door_candidates = rest;
+        self.room.door_candidates = rest;
         for d in ready {
-            self.ekf.add_door(d.wall, d.position_m, 0.05);
-            self.door_widths.push(Some(d.width_m));
+            let info = KnownDoor {
+                width_m: Some(d.width_m),
+                plan_door: None,
+            };
+            self.room.add_door(d.wall, d.position_m, 0.05, info);
         }
+    }
+}
+
+/// Puts the doors the plan has in `room` into `view`'s filter, `sigma_m`
+/// uncertain, except those it holds already.
+fn add_plan_doors(view: &mut RoomView, plan: &FloorPlan, room: usize, sigma_m: f64) {
+    for (door, side) in plan.doors_of(room) {
+        if view.door_info.iter().any(|i| i.plan_door == Some(door)) {
+            continue;
+        }
+        let info = KnownDoor {
+            width_m: Some(plan.doors()[door].width_m),
+            plan_door: Some(door),
+        };
+        view.add_door(side.wall.index(), side.along_m, sigma_m, info);
     }
 }

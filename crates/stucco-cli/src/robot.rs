@@ -2,8 +2,8 @@
 //! (or faster), commanded and watched over zenoh through `stucco-link`.
 
 use crate::mission::{BadInput, Mission};
-use crate::navigator::{DT_S, Navigator};
-use crate::task_mission::RoomFrame;
+use crate::navigator::DT_S;
+use crate::task_mission::{mission_navigator, mission_room};
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -13,7 +13,6 @@ use std::time::{Duration, Instant};
 use stucco_core::{DriveCommand, Pose2, Stamp};
 use stucco_link::{Denial, LinkConfig, RobotLink, ScanFrame};
 use stucco_mission::{BehaviourKind, Hazard, Inputs, MissionMode};
-use stucco_sim::Layout;
 
 /// What `stucco robot` was asked to do.
 #[derive(Clone, Debug)]
@@ -44,6 +43,9 @@ pub struct RobotState<'a> {
     pub task: Option<(usize, &'static str)>,
     /// The behaviour under way.
     pub behaviour: Option<&'a BehaviourKind>,
+    /// The floor plan's room the robot is in (the pose's frame), when the
+    /// mission has a plan.
+    pub room: Option<&'a str>,
     /// The estimated pose in the room.
     pub pose: Pose2,
     /// Its position σ, m.
@@ -74,26 +76,20 @@ pub struct RobotRun {
 pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
     crate::init_logging();
     let mission = Mission::load(&job.mission)?;
-    let known = mission
-        .start
-        .clone()
-        .ok_or_else(|| BadInput(format!("{}: no [start]", job.mission.display())))?;
     let world = mission.load_world(&job.mission)?;
     if !(job.speed.is_finite() && job.speed > 0.0) {
         return Err(BadInput("--speed: a positive number".to_owned()).into());
     }
     // The robot is put at the world's start, in the room frame of the room
     // it stands in.
-    let start = Pose2::new(
-        world.robot.at[0],
-        world.robot.at[1],
-        world.robot.heading_deg.to_radians(),
-    );
-    let frame = RoomFrame::of(&Layout::of(&world), &start)?;
-    let x0 = known.filter_start(&frame.to_room(&start));
-    let sprayer = mission.spray.as_ref().map(crate::plastering::sprayer_of);
-    let mut nav =
-        Navigator::with_sprayer(&world, mission.seed, x0, [known.room_sigma_m; 2], sprayer)?;
+    let (mut nav, _) = mission_navigator(&mission, &world, mission.seed, None)?;
+    if let (Some(plan), Some(room)) = (mission.floor_plan(), mission_room(&mission, None)?) {
+        nav.follow_plan(
+            plan,
+            room,
+            mission.start.as_ref().map_or(0.0, |s| s.room_sigma_m),
+        );
+    }
     nav.discover_doors(true);
     let mut exec = mission.executive(false);
     let session = match stucco_link::open(&job.link) {
@@ -162,6 +158,7 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
             mission: exec.mode(),
             task: exec.current_task(),
             behaviour: exec.current_behaviour(),
+            room: nav.room_name(),
             pose: est.pose,
             position_sigma_m: est.position_sigma_m,
             hazard: exec.hazard(),
@@ -184,6 +181,12 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
             if let Some(c) = exec.coverage() {
                 link.publish_coverage(&c)?;
             }
+        }
+        if let Some(door) = out.enter_room
+            && let Err(why) = nav.enter_through(door)
+        {
+            // The executive fails the task on its next tick.
+            tracing::warn!(robot = %job.name, door, "the robot's frame stays: {why}");
         }
         nav.tool(out.tool);
         bumper = nav.drive(out.drive);

@@ -140,6 +140,13 @@ pub struct MissionReport {
     /// Relative pose error over pairs of poses 1 m apart along the true
     /// path (none if the robot did not drive 1 m).
     pub rpe_1m: Option<stucco_nav::Rpe>,
+    /// The floor plan's room the robot's frame is in at the end (missions
+    /// with a plan).
+    pub room: Option<String>,
+    /// The room the robot truly stands in at the end.
+    pub room_true: Option<String>,
+    /// Each move of the robot's frame into the next room of the plan.
+    pub room_changes: Vec<RoomChange>,
     /// The room's size as estimated at the end, m.
     pub room_m: [f64; 2],
     /// Its true size, m.
@@ -186,6 +193,20 @@ pub struct MissionReport {
     pub mission_time_lower_bound_s: Option<f64>,
     /// The plastering's details.
     pub plaster: Option<crate::plastering::PlasterReport>,
+}
+
+/// The robot's frame moved into the next room of the floor plan.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoomChange {
+    /// When, simulated s.
+    pub stamp_s: f64,
+    /// Through this door of the plan.
+    pub door: usize,
+    /// The room the frame is in after it (unchanged when the move was
+    /// refused).
+    pub room: Option<String>,
+    /// The room the robot truly stood in then.
+    pub room_true: Option<String>,
 }
 
 /// The report of `--runs N` (`DIR/report.json`): the runs and their sum.
@@ -243,6 +264,9 @@ pub struct RoomMap {
     pub doors: Vec<DoorEstimate>,
     /// The robot's estimated pose in it.
     pub pose: Pose2,
+    /// The floor plan's room it is, when the mission has a plan.
+    #[serde(default)]
+    pub room: Option<String>,
 }
 
 /// FNV-1a digest of a mission file's text.
@@ -402,6 +426,21 @@ pub(crate) struct RoomFrame {
 }
 
 impl RoomFrame {
+    /// The room of `layout` named `name`.
+    pub(crate) fn named(layout: &Layout, name: &str) -> Result<RoomFrame> {
+        let room = layout
+            .rooms
+            .iter()
+            .find(|r| r.name == name)
+            .ok_or_else(|| BadInput(format!("the plan's room {name:?} is not in the world")))?;
+        let (lo, hi) = bounds(&room.corners);
+        Ok(RoomFrame {
+            name: room.name.clone(),
+            origin: lo,
+            size_m: [hi[0] - lo[0], hi[1] - lo[1]],
+        })
+    }
+
     /// The room of `layout` holding `at`.
     pub(crate) fn of(layout: &Layout, at: &Pose2) -> Result<RoomFrame> {
         let room = layout
@@ -423,6 +462,11 @@ impl RoomFrame {
     /// `p` (world frame) in the room frame.
     pub(crate) fn to_room(&self, p: &Pose2) -> Pose2 {
         Pose2::new(p.x - self.origin[0], p.y - self.origin[1], p.theta)
+    }
+
+    /// `p` (room frame) in the world frame.
+    pub(crate) fn to_world(&self, p: &Pose2) -> Pose2 {
+        Pose2::new(p.x + self.origin[0], p.y + self.origin[1], p.theta)
     }
 }
 
@@ -470,42 +514,17 @@ fn run_once(
     } = *setup;
     let t0 = Instant::now();
     let layout = Layout::of(world);
-    let world_start = Pose2::new(
-        world.robot.at[0],
-        world.robot.at[1],
-        world.robot.heading_deg.to_radians(),
-    );
-    // The room is the one the robot was put in at the start.
-    let frame = RoomFrame::of(&layout, &world_start)?;
-    let (origin, room_true) = (frame.origin, frame.size_m);
-    let to_room = |p: &Pose2| frame.to_room(p);
-    let known = mission
-        .start
-        .as_ref()
-        .ok_or_else(|| BadInput(format!("mission {:?}: no [start]", mission.name)))?;
     let mut world = world.clone();
-    let (x0, size_sigma) = match resume {
+    if let Some(cp) = resume {
         // Where the robot stopped, knowing what it knew.
-        Some(cp) => {
-            world.robot.at = [cp.sim_pose.x, cp.sim_pose.y];
-            world.robot.heading_deg = cp.sim_pose.theta.to_degrees();
-            let p = cp.map.pose;
-            (
-                SVector::<f64, 5>::new(p.x, p.y, p.theta, cp.map.room_m[0], cp.map.room_m[1]),
-                cp.map.room_sigma_m,
-            )
-        }
-        // Where it was put, off by a known amount, the room as planned.
-        None => (
-            known.filter_start(&to_room(&world_start)),
-            [known.room_sigma_m; 2],
-        ),
-    };
-    let sprayer = mission.spray.as_ref().map(crate::plastering::sprayer_of);
-    let mut nav = Navigator::with_sprayer(&world, seed, x0, size_sigma, sprayer)?;
+        world.robot.at = [cp.sim_pose.x, cp.sim_pose.y];
+        world.robot.heading_deg = cp.sim_pose.theta.to_degrees();
+    }
+    let (mut nav, start_frame) =
+        mission_navigator(mission, &world, seed, resume.map(|cp| &cp.map))?;
     if let Some(cp) = resume {
         for d in &cp.map.doors {
-            nav.add_known_door(d.wall.index(), d.position_m, d.width_m, d.sigma_m);
+            nav.add_known_door(d);
         }
         // The plaster stays on the walls when the robot stops.
         if let Some(dir) = out
@@ -514,6 +533,26 @@ fn run_once(
             crate::plastering::WorldState::load(&dir.join(WORLD_FILE))?.restore(nav.sim_mut());
         }
     }
+    if let Some((plan, room)) = mission
+        .floor_plan()
+        .zip(mission_room(mission, resume.map(|cp| &cp.map))?)
+    {
+        nav.follow_plan(
+            plan,
+            room,
+            mission.start.as_ref().map_or(0.0, |s| s.room_sigma_m),
+        );
+    }
+    // The truth in the frame of the room the robot is in (scoring only).
+    let mut frame = start_frame;
+    let true_frame = |nav: &Navigator, frame: &mut RoomFrame| -> Result<()> {
+        if let Some(name) = nav.room_name()
+            && name != frame.name
+        {
+            *frame = RoomFrame::named(&layout, name)?;
+        }
+        Ok(())
+    };
     nav.discover_doors(true);
     let mut exec = mission.executive(true);
     if let Some(cp) = resume {
@@ -580,6 +619,7 @@ fn run_once(
                     room_sigma_m: est.room_sigma_m,
                     doors: est.doors.clone(),
                     pose: est.pose,
+                    room: nav.room_name().map(str::to_owned),
                 },
                 sim_pose: nav.truth(),
             };
@@ -616,6 +656,7 @@ fn run_once(
     let limit = mission.time_limit_s;
     let mut step = 0usize;
     let mut plan_seen: Option<stucco_plan::Plan> = None;
+    let mut room_changes = Vec::new();
     let mut plaster_start: Option<Pose2> = None;
     loop {
         let now = nav.now();
@@ -638,7 +679,7 @@ fn run_once(
                 out_.drive,
                 out_.tool,
                 &out_.events,
-                &to_room(&nav.truth()),
+                &frame.to_room(&nav.truth()),
             )?;
         }
         for e in &out_.events {
@@ -672,6 +713,19 @@ fn run_once(
         if plan_seen.is_none() && resume.is_some() {
             plan_seen = exec.plaster_plan().cloned();
         }
+        if let Some(door) = out_.enter_room {
+            // The executive checks on its next tick that the frame moved.
+            if let Err(why) = nav.enter_through(door) {
+                tracing::warn!(door, "the robot's frame stays: {why}");
+            }
+            true_frame(&nav, &mut frame)?;
+            room_changes.push(RoomChange {
+                stamp_s: now.as_secs_f64(),
+                door,
+                room: nav.room_name().map(str::to_owned),
+                room_true: true_room(&layout, &nav.truth()),
+            });
+        }
         nav.tool(out_.tool);
         if exec.mode().is_final() {
             break;
@@ -685,7 +739,7 @@ fn run_once(
             break;
         }
         bumper = nav.drive(out_.drive);
-        let truth = to_room(&nav.truth());
+        let truth = frame.to_room(&nav.truth());
         // A pass's standoff, on the truth, from where the pass starts.
         if let (
             Some((task, _)),
@@ -695,7 +749,7 @@ fn run_once(
         ) = (exec.current_task(), exec.current_behaviour())
             && let TaskSpec::FollowWall { from_m, to_m, .. } = exec.tasks()[task]
         {
-            let g = WallGeometry::of(wall, room_true);
+            let g = WallGeometry::of(wall, frame.size_m);
             let p = truth.position().coords;
             let at = g.position(&p);
             if (to_m > from_m && at >= from_m) || (to_m < from_m && at <= from_m) {
@@ -706,10 +760,13 @@ fn run_once(
                     .push(g.distance(&p) - standoff_m);
             }
         }
+        // The trace in the world frame: the estimate placed by the true
+        // corner of the room it is kept in.
+        let (est_w, truth_w) = (frame.to_world(&nav.mission_estimate().pose), nav.truth());
         if step.is_multiple_of(5) {
-            trace.push(&nav.mission_estimate().pose, &truth);
+            trace.push(&est_w, &truth_w);
         }
-        trace.errors(&nav.mission_estimate().pose, &truth);
+        trace.errors(&est_w, &truth_w);
         step += 1;
         if step.is_multiple_of(50) {
             let task = exec.current_task().map_or("", |t| t.1);
@@ -748,7 +805,7 @@ fn run_once(
         .iter()
         .filter(|o| o.kind == OpeningKind::OpenDoor)
         .map(|o| Point2::from((o.edges[0].coords + o.edges[1].coords) / 2.0))
-        .map(|c| Point2::new(c.x - origin[0], c.y - origin[1]))
+        .map(|c| Point2::new(c.x - frame.origin[0], c.y - frame.origin[1]))
         .collect();
     let doors = est
         .doors
@@ -779,11 +836,11 @@ fn run_once(
             let e: Vec<nalgebra::Vector2<f64>> = o
                 .edges
                 .iter()
-                .map(|p| nalgebra::Vector2::new(p.x - origin[0], p.y - origin[1]))
+                .map(|p| nalgebra::Vector2::new(p.x - frame.origin[0], p.y - frame.origin[1]))
                 .collect();
             let mid = (e[0] + e[1]) / 2.0;
             WallName::ALL.iter().find_map(|&w| {
-                let g = WallGeometry::of(w, room_true);
+                let g = WallGeometry::of(w, frame.size_m);
                 (g.distance(&mid).abs() < 0.2).then(|| {
                     let (a, b) = (g.position(&e[0]), g.position(&e[1]));
                     (w, [a.min(b), a.max(b)], o.z)
@@ -888,8 +945,11 @@ fn run_once(
             &trace.poses.1,
             stucco_nav::Pairs::Distance(1.0),
         ),
+        room: nav.room_name().map(str::to_owned),
+        room_true: true_room(&layout, &nav.truth()),
+        room_changes,
         room_m: est.room_m,
-        room_true_m: room_true,
+        room_true_m: frame.size_m,
         room_sigma_m: est.room_sigma_m,
         walls_seen: est.walls_seen,
         doors,
@@ -943,7 +1003,7 @@ fn run_once(
             &dir.join("report.json"),
             serde_json::to_string_pretty(&report)?.as_bytes(),
         )?;
-        draw_run(&dir.join("map.svg"), &layout, origin, &trace, &est)?;
+        draw_run(&dir.join("map.svg"), &layout, frame.origin, &trace, &est)?;
     }
     Ok(report)
 }
@@ -956,7 +1016,7 @@ fn write_event(file: &mut Option<impl Write>, e: &Event) -> Result<()> {
     Ok(())
 }
 
-/// The estimated and true trajectories (room frame) and their errors.
+/// The estimated and true trajectories (world frame) and their errors.
 #[derive(Default)]
 struct Trace {
     estimated: Vec<[f64; 2]>,
@@ -1014,7 +1074,11 @@ fn draw_run(
         .collect();
     let [xs, ys] = est.room_m;
     let room = [(0.0, 0.0), (xs, 0.0), (xs, ys), (0.0, ys), (0.0, 0.0)];
-    let xy = |p: &[[f64; 2]]| p.iter().map(|q| (q[0], q[1])).collect::<Vec<_>>();
+    let xy = |p: &[[f64; 2]]| {
+        p.iter()
+            .map(|q| (q[0] - origin[0], q[1] - origin[1]))
+            .collect::<Vec<_>>()
+    };
     let (truth, estimated) = (xy(&trace.truth), xy(&trace.estimated));
     let doors: Vec<(f64, f64)> = est
         .doors
@@ -1044,4 +1108,78 @@ fn draw_run(
         ],
         &doors,
     )
+}
+
+/// The robot of `mission` on `world` (put where `world` says) with
+/// `seed`: its filter started as `[start]` says, or from the map a
+/// checkpoint kept; and the true frame of the room it starts in.
+pub(crate) fn mission_navigator(
+    mission: &Mission,
+    world: &WorldSpec,
+    seed: u64,
+    resume: Option<&RoomMap>,
+) -> Result<(Navigator, RoomFrame)> {
+    let known = mission
+        .start
+        .as_ref()
+        .ok_or_else(|| BadInput(format!("mission {:?}: no [start]", mission.name)))?;
+    let (size, plan_room) = mission
+        .start_room()
+        .ok_or_else(|| BadInput(format!("mission {:?}: no room to start in", mission.name)))?;
+    let layout = Layout::of(world);
+    let at = Pose2::new(
+        world.robot.at[0],
+        world.robot.at[1],
+        world.robot.heading_deg.to_radians(),
+    );
+    let frame = match (resume.and_then(|m| m.room.as_deref()), plan_room) {
+        (Some(name), _) => RoomFrame::named(&layout, name)?,
+        (None, Some(room)) => {
+            let frame = RoomFrame::of(&layout, &at)?;
+            let name = mission.rooms[room].name.as_str();
+            if frame.name != name {
+                return Err(BadInput(format!(
+                    "[start] room: the robot stands in {:?}, not {name:?}",
+                    frame.name
+                ))
+                .into());
+            }
+            frame
+        }
+        (None, None) => RoomFrame::of(&layout, &at)?,
+    };
+    let (x0, size_sigma) = match resume {
+        Some(m) => (
+            SVector::<f64, 5>::new(m.pose.x, m.pose.y, m.pose.theta, m.room_m[0], m.room_m[1]),
+            m.room_sigma_m,
+        ),
+        // Where it was put, off by a known amount, the room as planned.
+        None => (
+            known.filter_start(&frame.to_room(&at), size),
+            [known.room_sigma_m; 2],
+        ),
+    };
+    let sprayer = mission.spray.as_ref().map(crate::plastering::sprayer_of);
+    let nav = Navigator::with_sprayer(world, seed, x0, size_sigma, sprayer)?;
+    Ok((nav, frame))
+}
+
+/// The plan's room the robot is in at the start (or was in at a
+/// checkpoint), when the mission has a plan.
+pub(crate) fn mission_room(mission: &Mission, resume: Option<&RoomMap>) -> Result<Option<usize>> {
+    let Some(plan) = mission.floor_plan() else {
+        return Ok(None);
+    };
+    match resume.and_then(|m| m.room.as_deref()) {
+        Some(name) => plan.room(name).map(Some).ok_or_else(|| {
+            BadInput(format!("the checkpoint's room {name:?} is not on the plan")).into()
+        }),
+        None => Ok(mission.start_room().and_then(|(_, r)| r)),
+    }
+}
+
+/// The room of `layout` that `at` (world frame) stands in (none in a
+/// doorway's thickness).
+fn true_room(layout: &Layout, at: &Pose2) -> Option<String> {
+    RoomFrame::of(layout, at).ok().map(|f| f.name)
 }

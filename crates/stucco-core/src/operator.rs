@@ -88,6 +88,12 @@ pub enum Command {
         /// The door.
         door: usize,
     },
+    /// Go to a room of the floor plan (by its name), through the doors
+    /// the plan's shortest way takes.
+    GoToRoom {
+        /// The room.
+        room: String,
+    },
     /// Follow a wall at a standoff between two positions along it.
     FollowWall {
         /// The wall.

@@ -3,7 +3,8 @@
 //! layer.
 
 use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
-use crate::model::{Estimate, WallGeometry, pose_at_wall};
+use crate::floor::FloorPlan;
+use crate::model::{DoorEstimate, Estimate, WallGeometry, pose_at_wall};
 use crate::plaster::{Cursor, Phase, PlasterCoverage, PlasterProgress, PlasterRun, plan_digest};
 use crate::supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor};
 use crate::task::{OnTimeout, TaskSpec, WallName};
@@ -224,6 +225,14 @@ pub enum EventKind {
         /// The surface.
         surface: String,
     },
+    /// The robot went through a door of the floor plan and its frame is
+    /// now the room beyond it.
+    RoomEntered {
+        /// The door of the plan.
+        door: usize,
+        /// The room, by its name on the plan.
+        room: String,
+    },
     /// A plastering plan was made (again, after a survey).
     PlanMade {
         /// The task.
@@ -274,6 +283,10 @@ pub struct Outputs {
     pub checkpoint_due: bool,
     /// Replies to telecommands.
     pub acks: Vec<Ack>,
+    /// The robot has just gone through this door of the floor plan: the
+    /// navigation core should move its frame to the room beyond it (the
+    /// task waits for the estimate to say so).
+    pub enter_room: Option<usize>,
 }
 
 /// The executive's settings.
@@ -290,6 +303,9 @@ pub struct ExecutiveConfig {
     pub unattended: bool,
     /// The spray tool and the coat, for `plaster` tasks.
     pub spray: Option<SprayTool>,
+    /// The building's rooms and doors, for `go_to_room` (and for
+    /// `pass_door` to move the frame into the next room).
+    pub floor: Option<FloorPlan>,
 }
 
 /// The mission's progress as a checkpoint keeps it.
@@ -331,6 +347,26 @@ struct ActiveTask {
     blocked_s: f64,
     /// A `plaster` task's plan and where it is in it.
     plaster: Option<PlasterRun>,
+    /// A way through doors of the floor plan (`go_to_room`, or a
+    /// `pass_door` through a door the plan has).
+    doorway: Option<Doorway>,
+}
+
+/// A task's way through doors of the floor plan, one at a time.
+#[derive(Clone, Debug)]
+struct Doorway {
+    /// The door being driven through.
+    through: Option<usize>,
+    /// The doors after it.
+    hops: VecDeque<usize>,
+    /// The room the robot was said to have entered, until the estimate
+    /// is in it.
+    entering: Option<usize>,
+    /// The door it went through last.
+    passed: Option<usize>,
+    approach_m: f64,
+    beyond_m: f64,
+    speed_mps: f64,
 }
 
 /// The executive.
@@ -369,6 +405,8 @@ pub struct Executive {
     /// A checkpoint's plastering progress and the plan beside it, for the
     /// `plaster` task to take up.
     resume_plaster: Option<(PlasterProgress, Option<Plan>)>,
+    /// The door of the plan the robot has just gone through.
+    enter_room: Option<usize>,
 }
 
 impl Executive {
@@ -401,6 +439,7 @@ impl Executive {
             dt: 0.0,
             stroke_done: false,
             resume_plaster: None,
+            enter_room: None,
         }
     }
 
@@ -639,6 +678,7 @@ impl Executive {
             events: std::mem::take(&mut self.events),
             checkpoint_due,
             acks: std::mem::take(&mut self.acks),
+            enter_room: self.enter_room.take(),
         }
     }
 
@@ -856,6 +896,11 @@ impl Executive {
                 reason: format!("door {door} is not known ({} found)", est.doors.len()),
             };
         }
+        if let TaskSpec::GoToRoom { room, .. } = &spec
+            && let Err(reason) = self.route(room, est)
+        {
+            return Reply::Rejected { reason };
+        }
         // Next after the task under way; a task waiting for the operator
         // has its answer.
         let at = match &self.active {
@@ -1009,6 +1054,7 @@ impl Executive {
                             loops: 0,
                             blocked_s: 0.0,
                             plaster: None,
+                            doorway: None,
                         });
                         self.fail(now, reason);
                         return (DriveCommand::STOP, true);
@@ -1040,6 +1086,7 @@ impl Executive {
         let pose = est.pose;
         let mut queue = VecDeque::new();
         let mut plaster = None;
+        let mut doorway = None;
         if let TaskSpec::Plaster {
             walls,
             ceiling,
@@ -1201,21 +1248,54 @@ impl Executive {
                         est.doors.len()
                     ));
                 };
-                let g = WallGeometry::of(d.wall, est.room_m);
-                let heading = (-g.inward.y).atan2(-g.inward.x);
-                let a = g.point(d.position_m, *approach_m);
-                let b = g.point(d.position_m, -*beyond_m);
-                queue.extend(go_to(
+                queue.extend(door_pass(
                     gains,
                     &pose,
-                    &Pose2::new(a.x, a.y, heading),
+                    d,
+                    est.room_m,
+                    [*approach_m, *beyond_m],
                     *speed_mps,
                 ));
-                queue.push_back(Behaviour::regulate(
-                    gains,
-                    Pose2::new(b.x, b.y, heading),
-                    *speed_mps,
-                ));
+                // Through a door of the plan, the frame moves on.
+                if let (Some(plan_door), Some(_), Some(_)) =
+                    (d.plan_door, &self.config.floor, est.room)
+                {
+                    doorway = Some(Doorway {
+                        through: Some(plan_door),
+                        hops: VecDeque::new(),
+                        entering: None,
+                        passed: None,
+                        approach_m: *approach_m,
+                        beyond_m: *beyond_m,
+                        speed_mps: *speed_mps,
+                    });
+                }
+            }
+            TaskSpec::GoToRoom {
+                room,
+                approach_m,
+                beyond_m,
+                speed_mps,
+            } => {
+                let mut hops: VecDeque<usize> = self.route(room, est)?.into();
+                if let Some(first) = hops.pop_front() {
+                    queue.extend(plan_door_pass(
+                        gains,
+                        est,
+                        first,
+                        [*approach_m, *beyond_m],
+                        *speed_mps,
+                    )?);
+                    doorway = Some(Doorway {
+                        through: Some(first),
+                        hops,
+                        entering: None,
+                        passed: None,
+                        approach_m: *approach_m,
+                        beyond_m: *beyond_m,
+                        speed_mps: *speed_mps,
+                    });
+                }
             }
         }
         self.continue_asked = false;
@@ -1237,7 +1317,77 @@ impl Executive {
             loops: 0,
             blocked_s: 0.0,
             plaster,
+            doorway,
         })
+    }
+
+    /// The doors of the plan's way from the robot's room to `room`.
+    fn route(&self, room: &str, est: &Estimate) -> Result<Vec<usize>, String> {
+        let Some(floor) = &self.config.floor else {
+            return Err("go_to_room: the mission has no floor plan ([[room]], [[door]])".into());
+        };
+        let Some(to) = floor.room(room) else {
+            let names: Vec<&str> = floor.rooms().iter().map(|r| r.name.as_str()).collect();
+            return Err(format!(
+                "go_to_room: no room {room:?} on the plan (it has {})",
+                names.join(", ")
+            ));
+        };
+        let Some(here) = est.room else {
+            return Err("go_to_room: the robot does not know which room it is in".into());
+        };
+        floor.route(here, to).ok_or_else(|| {
+            format!(
+                "go_to_room: no way on the plan from {} to {room}",
+                floor.rooms()[here].name
+            )
+        })
+    }
+
+    /// A doorway's step before its behaviours: once the robot was said to
+    /// have gone through a door, the estimate must be in the room beyond
+    /// it; then the next door's passage is planned, or the task is done.
+    fn step_doorway(&mut self, now: Stamp, est: &Estimate) -> Option<TaskStep> {
+        let gains = self.config.gains.clone();
+        let a = self.active.as_mut()?;
+        let w = a.doorway.as_mut()?;
+        let room = w.entering?;
+        let name = |r: usize| {
+            self.config
+                .floor
+                .as_ref()
+                .and_then(|f| f.rooms().get(r))
+                .map_or_else(|| format!("room {r}"), |r| r.name.clone())
+        };
+        if est.room != Some(room) {
+            return Some(TaskStep::Failed(format!(
+                "{}: the robot went through the door into {} but its estimate did not follow \
+                 (it is not beyond the door)",
+                self.tasks[a.index].name(),
+                name(room)
+            )));
+        }
+        w.entering = None;
+        if let Some(door) = w.passed {
+            self.events.push(Event {
+                stamp: now,
+                kind: EventKind::RoomEntered {
+                    door,
+                    room: name(room),
+                },
+            });
+        }
+        let Some(next) = w.hops.pop_front() else {
+            return Some(TaskStep::Done);
+        };
+        match plan_door_pass(&gains, est, next, [w.approach_m, w.beyond_m], w.speed_mps) {
+            Ok(q) => {
+                w.through = Some(next);
+                a.queue.extend(q);
+                None
+            }
+            Err(e) => Some(TaskStep::Failed(e)),
+        }
     }
 
     /// Radius the body sweeps turning on the spot, with a margin for what
@@ -1584,6 +1734,12 @@ impl Executive {
             let (walls, ceiling) = (walls.clone(), *ceiling);
             return self.step_plaster(now, est, speed, settle, (&walls, ceiling));
         }
+        if a.doorway.as_ref().is_some_and(|w| w.entering.is_some()) {
+            if let Some(step) = self.step_doorway(now, est) {
+                return step;
+            }
+            return self.step_task(now, est);
+        }
         let elapsed = now.seconds_since(a.started);
         // Task-level ends: timeouts and the conditions behaviours do not see.
         match spec {
@@ -1695,6 +1851,26 @@ impl Executive {
                 Step::Drive(cmd) => return TaskStep::Drive(cmd),
                 Step::Done => {
                     a.current = None;
+                    if a.queue.is_empty()
+                        && let Some(w) = a.doorway.as_mut()
+                        && let Some(door) = w.through.take()
+                    {
+                        // Beyond the door: the frame moves to the next
+                        // room, and the next tick checks it did.
+                        let beyond = est.room.and_then(|r| {
+                            self.config.floor.as_ref().and_then(|f| f.beyond(door, r))
+                        });
+                        let Some(beyond) = beyond else {
+                            return TaskStep::Failed(format!(
+                                "{}: door {door} of the plan is not a door of the robot's room",
+                                spec.name()
+                            ));
+                        };
+                        w.entering = Some(beyond);
+                        w.passed = Some(door);
+                        self.enter_room = Some(door);
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
                     if a.queue.is_empty() {
                         // Let the task-level check decide on the next tick
                         // (a survey may loop again); stand still meanwhile.
@@ -2028,4 +2204,52 @@ fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
     p.push(a);
     p.push(mid);
     p
+}
+
+/// The behaviours through door `d` of the room `room_m` in size: onto the
+/// line across its middle `approach_beyond_m[0]` before it, along the line
+/// to `approach_beyond_m[1]` beyond it.
+fn door_pass(
+    gains: &GainSchedule,
+    pose: &Pose2,
+    d: &DoorEstimate,
+    room_m: [f64; 2],
+    approach_beyond_m: [f64; 2],
+    speed_mps: f64,
+) -> Vec<Behaviour> {
+    let g = WallGeometry::of(d.wall, room_m);
+    let heading = (-g.inward.y).atan2(-g.inward.x);
+    let a = g.point(d.position_m, approach_beyond_m[0]);
+    let b = g.point(d.position_m, -approach_beyond_m[1]);
+    let mut out = go_to(gains, pose, &Pose2::new(a.x, a.y, heading), speed_mps);
+    out.push(Behaviour::regulate(
+        gains,
+        Pose2::new(b.x, b.y, heading),
+        speed_mps,
+    ));
+    out
+}
+
+/// [`door_pass`] through door `door` of the floor plan, as the robot knows
+/// it in its room.
+fn plan_door_pass(
+    gains: &GainSchedule,
+    est: &Estimate,
+    door: usize,
+    approach_beyond_m: [f64; 2],
+    speed_mps: f64,
+) -> Result<Vec<Behaviour>, String> {
+    let d = est
+        .doors
+        .iter()
+        .find(|d| d.plan_door == Some(door))
+        .ok_or_else(|| format!("go_to_room: door {door} of the plan is not known in this room"))?;
+    Ok(door_pass(
+        gains,
+        &est.pose,
+        d,
+        est.room_m,
+        approach_beyond_m,
+        speed_mps,
+    ))
 }

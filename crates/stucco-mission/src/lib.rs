@@ -31,6 +31,7 @@
 
 mod behaviour;
 mod executive;
+mod floor;
 mod model;
 mod plaster;
 mod supervisor;
@@ -41,6 +42,7 @@ pub use executive::{
     Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode, OperatorCommand, Outputs,
     PARK_NOZZLE_M, Progress, ProgressMismatch, TaskStatus,
 };
+pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom};
 pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wall};
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};

@@ -18,6 +18,9 @@ pub struct DoorEstimate {
     pub width_m: Option<f64>,
     /// Standard deviation of its position, m.
     pub sigma_m: f64,
+    /// The door of the floor plan it is, if the plan has it.
+    #[serde(default)]
+    pub plan_door: Option<usize>,
 }
 
 /// The navigation core's estimate, as the executive reads it.
@@ -49,6 +52,10 @@ pub struct Estimate {
     /// What stands on the floor, as the scans show it.
     #[serde(default)]
     pub obstacles: Vec<stucco_plan::Obstacle>,
+    /// The room of the floor plan the robot is in (the frame's room),
+    /// when the mission has a plan.
+    #[serde(default)]
+    pub room: Option<usize>,
 }
 
 fn default_height() -> f64 {

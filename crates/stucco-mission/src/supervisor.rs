@@ -267,6 +267,7 @@ mod tests {
             height_m: 2.6,
             windows: Vec::new(),
             obstacles: Vec::new(),
+            room: None,
         }
     }
 

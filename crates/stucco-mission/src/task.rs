@@ -167,6 +167,23 @@ pub enum TaskSpec {
         #[serde(default = "drive_speed")]
         speed_mps: f64,
     },
+    /// Goes to the room of the floor plan named `room`: through each door
+    /// of the plan's shortest way in turn, as [`TaskSpec::PassDoor`] does,
+    /// the robot's frame moving to the next room beyond each. Done at once
+    /// when the robot is there already.
+    GoToRoom {
+        /// The room.
+        room: String,
+        /// Distance before each door where the approach line starts, m.
+        #[serde(default = "approach")]
+        approach_m: f64,
+        /// Distance beyond each door where its passage ends, m.
+        #[serde(default = "beyond")]
+        beyond_m: f64,
+        /// Speed, m/s.
+        #[serde(default = "drive_speed")]
+        speed_mps: f64,
+    },
     /// Plasters the room's walls and ceiling with the mission's spray tool:
     /// plans stations and strokes on the room as the robot knows it (its
     /// size, doors, windows, what stands on the floor), then drives from
@@ -214,7 +231,13 @@ impl TaskSpec {
     /// would give it; `None` for commands that are not tasks.
     pub fn from_command(c: &stucco_core::Command) -> Option<TaskSpec> {
         use stucco_core::Command as C;
-        Some(match *c {
+        Some(match c {
+            C::GoToRoom { room } => TaskSpec::GoToRoom {
+                room: room.clone(),
+                approach_m: approach(),
+                beyond_m: beyond(),
+                speed_mps: drive_speed(),
+            },
             C::MapRoom => TaskSpec::MapRoom {
                 path: None,
                 walls: all_walls(),
@@ -225,7 +248,7 @@ impl TaskSpec {
                 timeout_s: map_timeout(),
             },
             C::PassDoor { door } => TaskSpec::PassDoor {
-                door,
+                door: *door,
                 approach_m: approach(),
                 beyond_m: beyond(),
                 speed_mps: drive_speed(),
@@ -236,10 +259,10 @@ impl TaskSpec {
                 from_m,
                 to_m,
             } => TaskSpec::FollowWall {
-                wall,
-                standoff_m,
-                from_m,
-                to_m,
+                wall: *wall,
+                standoff_m: *standoff_m,
+                from_m: *from_m,
+                to_m: *to_m,
                 speed_mps: follow_speed(),
             },
             C::MoveRelative {
@@ -247,9 +270,9 @@ impl TaskSpec {
                 dy_m,
                 dtheta_deg,
             } => TaskSpec::MoveRelative {
-                dx_m,
-                dy_m,
-                dtheta_deg,
+                dx_m: *dx_m,
+                dy_m: *dy_m,
+                dtheta_deg: *dtheta_deg,
                 speed_mps: drive_speed(),
             },
             C::AlignToWall {
@@ -258,18 +281,18 @@ impl TaskSpec {
                 at_m,
                 side,
             } => TaskSpec::AlignToWall {
-                wall,
-                standoff_m,
-                at_m,
-                side,
+                wall: *wall,
+                standoff_m: *standoff_m,
+                at_m: *at_m,
+                side: *side,
                 speed_mps: drive_speed(),
             },
             C::PlasterSurface { surface } => TaskSpec::Plaster {
                 walls: match surface {
-                    stucco_core::SurfaceName::Wall(w) => vec![w],
+                    stucco_core::SurfaceName::Wall(w) => vec![*w],
                     stucco_core::SurfaceName::Ceiling => Vec::new(),
                 },
-                ceiling: surface == stucco_core::SurfaceName::Ceiling,
+                ceiling: *surface == stucco_core::SurfaceName::Ceiling,
                 speed_mps: follow_speed(),
                 settle_s: settle(),
                 survey: true,
@@ -288,6 +311,7 @@ impl TaskSpec {
             TaskSpec::AlignToWall { .. } => "align_to_wall",
             TaskSpec::FollowWall { .. } => "follow_wall",
             TaskSpec::PassDoor { .. } => "pass_door",
+            TaskSpec::GoToRoom { .. } => "go_to_room",
             TaskSpec::Plaster { .. } => "plaster",
             TaskSpec::WaitForOperator { .. } => "wait_for_operator",
         }
@@ -409,6 +433,12 @@ impl TaskSpec {
                 }
             }
             TaskSpec::PassDoor {
+                approach_m,
+                beyond_m,
+                speed_mps,
+                ..
+            }
+            | TaskSpec::GoToRoom {
                 approach_m,
                 beyond_m,
                 speed_mps,

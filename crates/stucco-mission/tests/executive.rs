@@ -24,6 +24,9 @@ struct Robot {
     now: Stamp,
     room_sigma: [f64; 2],
     doors: Vec<DoorEstimate>,
+    /// The plan's room the pose is in, and its size.
+    room: Option<usize>,
+    room_m: [f64; 2],
 }
 
 impl Robot {
@@ -36,6 +39,8 @@ impl Robot {
             now: Stamp::ZERO,
             room_sigma: [0.001; 2],
             doors: Vec::new(),
+            room: None,
+            room_m: ROOM,
         }
     }
 
@@ -45,14 +50,43 @@ impl Robot {
             pose: self.pose,
             position_sigma_m: 0.003,
             heading_sigma_rad: 0.002,
-            room_m: ROOM,
+            room_m: self.room_m,
             room_sigma_m: self.room_sigma,
             walls_seen: [100; 4],
             doors: self.doors.clone(),
             height_m: 2.6,
             windows: Vec::new(),
             obstacles: Vec::new(),
+            room: self.room,
         }
+    }
+
+    /// In `room` of `plan`, knowing its doors as the plan places them.
+    fn in_room(&mut self, plan: &FloorPlan, room: usize) {
+        self.room = Some(room);
+        self.room_m = plan.rooms()[room].size_m;
+        self.doors = plan
+            .doors_of(room)
+            .map(|(door, side)| DoorEstimate {
+                wall: side.wall,
+                position_m: side.along_m,
+                width_m: Some(plan.doors()[door].width_m),
+                sigma_m: 0.01,
+                plan_door: Some(door),
+            })
+            .collect();
+    }
+
+    /// Beyond `door` of `plan`: the frame moved into the next room, as the
+    /// navigation core moves it.
+    fn through(&mut self, plan: &FloorPlan, door: usize) {
+        let room = self.room.unwrap();
+        let along = plan.side(door, room).unwrap().along_m;
+        let (next, pose) = plan
+            .transfer(door, room, &self.pose, along, self.room_m)
+            .unwrap();
+        self.in_room(plan, next);
+        self.pose = pose;
     }
 
     fn drive(&mut self, cmd: DriveCommand) {
@@ -99,17 +133,20 @@ fn forward(dx_m: f64) -> TaskSpec {
     }
 }
 
+/// The settings of the tests' robot.
+fn config(unattended: bool) -> ExecutiveConfig {
+    ExecutiveConfig {
+        vehicle: VehicleSpec::default(),
+        gains: GainSchedule::default(),
+        safety: SafetyConfig::default(),
+        unattended,
+        spray: None,
+        floor: None,
+    }
+}
+
 fn executive(tasks: Vec<TaskSpec>, unattended: bool) -> Executive {
-    Executive::new(
-        ExecutiveConfig {
-            vehicle: VehicleSpec::default(),
-            gains: GainSchedule::default(),
-            safety: SafetyConfig::default(),
-            unattended,
-            spray: None,
-        },
-        tasks,
-    )
+    Executive::new(config(unattended), tasks)
 }
 
 /// Runs until the mission is over or `seconds` pass; the events.
@@ -617,6 +654,7 @@ fn the_operator_has_one_surface_plastered() {
             safety: SafetyConfig::default(),
             unattended: false,
             spray: Some(stucco_plan::SprayTool::default()),
+            floor: None,
         },
         vec![TaskSpec::WaitForOperator {
             prompt: "standing by".to_owned(),
@@ -899,6 +937,7 @@ fn a_lost_link_stops_a_jog_and_pauses_by_default() {
                 },
                 unattended: false,
                 spray: None,
+                floor: None,
             },
             vec![forward(2.0)],
         );
@@ -979,6 +1018,7 @@ fn a_plaster_task_sprays_every_pass_and_resumes_mid_stroke() {
                 safety: SafetyConfig::default(),
                 unattended: true,
                 spray: Some(tool.clone()),
+                floor: None,
             },
             vec![plaster(false)],
         )
@@ -1087,4 +1127,158 @@ fn a_plaster_task_sprays_every_pass_and_resumes_mid_stroke() {
         "{:?}",
         wrong.mode()
     );
+}
+
+// ---- Rooms of a floor plan ------------------------------------------------
+
+/// Two offices side by side joined by a door, a hall south of both.
+fn offices() -> FloorPlan {
+    let room = |name: &str, origin_m, size_m| PlanRoom {
+        name: name.to_owned(),
+        origin_m,
+        size_m,
+    };
+    let door = |a: &str, b: &str, at_m| PlanDoor {
+        rooms: [a.to_owned(), b.to_owned()],
+        at_m,
+        width_m: 1.0,
+    };
+    FloorPlan::new(
+        vec![
+            room("hall", [0.0, 0.0], [10.3, 3.0]),
+            room("west", [0.0, 3.15], [5.0, 4.0]),
+            room("east", [5.3, 3.15], [5.0, 4.0]),
+        ],
+        vec![
+            door("hall", "west", [2.5, 3.075]),
+            door("west", "east", [5.15, 5.5]),
+        ],
+    )
+    .unwrap()
+}
+
+fn with_plan(tasks: Vec<TaskSpec>, unattended: bool) -> Executive {
+    let floor = Some(offices());
+    Executive::new(
+        ExecutiveConfig {
+            floor,
+            ..config(unattended)
+        },
+        tasks,
+    )
+}
+
+fn go_to(room: &str) -> TaskSpec {
+    TaskSpec::GoToRoom {
+        room: room.to_owned(),
+        approach_m: 1.0,
+        beyond_m: 0.8,
+        speed_mps: 0.3,
+    }
+}
+
+/// Runs `exec` on `robot`, moving the robot's frame through each door
+/// the executive says it went through when `follow` (as the navigation
+/// core does); the doors it said so for.
+fn run_rooms(
+    exec: &mut Executive,
+    robot: &mut Robot,
+    plan: &FloorPlan,
+    follow: bool,
+) -> Vec<usize> {
+    let mut doors = Vec::new();
+    for _ in 0..(240.0 / DT) as usize {
+        let out = ask(exec, robot, Seen::default());
+        if let Some(door) = out.enter_room {
+            doors.push(door);
+            if follow {
+                robot.through(plan, door);
+            }
+        }
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    doors
+}
+
+#[test]
+fn go_to_room_passes_each_door_of_the_way_and_follows_the_frame() {
+    let plan = offices();
+    let mut robot = Robot::at(Pose2::new(1.5, 1.2, 0.0));
+    robot.in_room(&plan, 0);
+    let mut exec = with_plan(vec![go_to("east"), go_to("east"), go_to("hall")], true);
+    let doors = run_rooms(&mut exec, &mut robot, &plan, true);
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    // Hall → west → east, then nothing (there already), then back.
+    assert_eq!(doors, [0, 1, 1, 0]);
+    assert_eq!(robot.room, Some(0));
+    // 0.8 m beyond the west office's south wall at the door, heading
+    // south, in the hall's frame.
+    let p = robot.pose;
+    assert!(
+        (p.x - 2.5).abs() < 0.05 && (p.y - 2.35).abs() < 0.05,
+        "{p:?}"
+    );
+}
+
+#[test]
+fn a_frame_that_does_not_follow_fails_the_task_and_stops_the_robot() {
+    let plan = offices();
+    let mut robot = Robot::at(Pose2::new(1.5, 1.2, 0.0));
+    robot.in_room(&plan, 0);
+    let mut exec = with_plan(vec![go_to("east")], true);
+    let doors = run_rooms(&mut exec, &mut robot, &plan, false);
+    assert_eq!(doors, [0]);
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?}", exec.mode());
+    };
+    assert!(reason.contains("estimate did not follow"), "{reason}");
+}
+
+#[test]
+fn go_to_room_from_the_operator_names_what_is_wrong() {
+    let plan = offices();
+    let mut robot = Robot::at(Pose2::new(1.5, 1.2, 0.0));
+    robot.in_room(&plan, 0);
+    let go = |id: &str, room: &str| {
+        command(
+            id,
+            Stamp::ZERO,
+            Command::GoToRoom {
+                room: room.to_owned(),
+            },
+        )
+    };
+    // No plan: refused, saying so.
+    let mut exec = standing_by();
+    let out = tick_with(&mut exec, &mut robot, &[go("g0", "west")]);
+    let Reply::Rejected { reason } = &out.acks[0].reply else {
+        panic!("{:?}", out.acks);
+    };
+    assert!(reason.contains("no floor plan"), "{reason}");
+    // A room the plan does not have: refused, naming those it has.
+    let mut exec = with_plan(exec.tasks().to_vec(), false);
+    let out = tick_with(&mut exec, &mut robot, &[go("g1", "kitchen")]);
+    let Reply::Rejected { reason } = &out.acks[0].reply else {
+        panic!("{:?}", out.acks);
+    };
+    assert!(reason.contains("hall, west, east"), "{reason}");
+    // A room it has: accepted, carried out, done.
+    let out = tick_with(&mut exec, &mut robot, &[go("g2", "west")]);
+    assert_eq!(out.acks[0].reply, Reply::Accepted);
+    let mut done = None;
+    for _ in 0..(120.0 / DT) as usize {
+        let out = tick_with(&mut exec, &mut robot, &[]);
+        if let Some(door) = out.enter_room {
+            robot.through(&plan, door);
+        }
+        if let Some(a) = out.acks.iter().find(|a| a.id == "g2") {
+            done = Some(a.reply.clone());
+            break;
+        }
+    }
+    assert_eq!(done, Some(Reply::Done));
+    assert_eq!(robot.room, Some(1));
 }

@@ -1,0 +1,407 @@
+//! The floor plan a mission may carry: rooms as rectangles on the
+//! building's drawing, doors between them. The robot keeps one room frame
+//! at a time (its filter's); the plan says which rooms there are, how they
+//! connect, and where the next room's frame lies once the robot has gone
+//! through a door. Routes between named rooms run over its doors.
+
+use crate::model::WallGeometry;
+use crate::task::WallName;
+use nalgebra::Vector2;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use stucco_core::Pose2;
+
+/// A room of the plan: a rectangle with its walls along the plan's axes.
+/// Its frame (the one the robot's filter keeps while inside) has its
+/// origin in the south-west corner.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRoom {
+    /// Its name (tasks and telecommands name rooms by it).
+    pub name: String,
+    /// The south-west corner on the plan, m.
+    pub origin_m: [f64; 2],
+    /// Its size along x and y, m.
+    pub size_m: [f64; 2],
+}
+
+/// A door of the plan between two rooms.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanDoor {
+    /// The rooms it joins.
+    pub rooms: [String; 2],
+    /// Its middle on the plan (anywhere across the wall's thickness), m.
+    pub at_m: [f64; 2],
+    /// Its width, m.
+    pub width_m: f64,
+}
+
+/// Where a door lies in one of its rooms.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DoorSide {
+    /// The room.
+    pub room: usize,
+    /// The wall of that room it is in.
+    pub wall: WallName,
+    /// Its middle along that wall, m.
+    pub along_m: f64,
+}
+
+/// What is wrong in a plan: the door or room (by its index in the file)
+/// and the field.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{table} {index}: {field}: {why}")]
+pub struct PlanFault {
+    /// `room` or `door`.
+    pub table: &'static str,
+    /// Its index among the file's tables of that name.
+    pub index: usize,
+    /// The field at fault.
+    pub field: &'static str,
+    /// Why.
+    pub why: String,
+}
+
+/// A door further than this from a wall's line is not in it, m (half a
+/// thick wall and the drawing's slack).
+const DOOR_IN_WALL_M: f64 = 0.3;
+
+/// A floor plan, checked: every door lies in a wall of each of its two
+/// rooms, inside the wall's length.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "PlanText", into = "PlanText")]
+pub struct FloorPlan {
+    rooms: Vec<PlanRoom>,
+    doors: Vec<PlanDoor>,
+    sides: Vec<[DoorSide; 2]>,
+}
+
+/// A plan as written.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct PlanText {
+    rooms: Vec<PlanRoom>,
+    doors: Vec<PlanDoor>,
+}
+
+impl TryFrom<PlanText> for FloorPlan {
+    type Error = PlanFault;
+    fn try_from(t: PlanText) -> Result<Self, PlanFault> {
+        FloorPlan::new(t.rooms, t.doors)
+    }
+}
+
+impl From<FloorPlan> for PlanText {
+    fn from(p: FloorPlan) -> Self {
+        PlanText {
+            rooms: p.rooms,
+            doors: p.doors,
+        }
+    }
+}
+
+impl FloorPlan {
+    /// Checks `rooms` and `doors` and places each door in its rooms' walls.
+    pub fn new(rooms: Vec<PlanRoom>, doors: Vec<PlanDoor>) -> Result<Self, PlanFault> {
+        let fault = |table, index, field, why: String| PlanFault {
+            table,
+            index,
+            field,
+            why,
+        };
+        let mut names = BTreeSet::new();
+        for (i, r) in rooms.iter().enumerate() {
+            if !names.insert(r.name.as_str()) {
+                return Err(fault("room", i, "name", format!("{:?} twice", r.name)));
+            }
+            if !r.size_m.iter().all(|v| v.is_finite() && *v > 0.0) {
+                return Err(fault("room", i, "size_m", "sides must be positive".into()));
+            }
+            if !r.origin_m.iter().all(|v| v.is_finite()) {
+                return Err(fault("room", i, "origin_m", "must be numbers".into()));
+            }
+        }
+        let mut sides = Vec::with_capacity(doors.len());
+        for (i, d) in doors.iter().enumerate() {
+            if !(d.width_m.is_finite() && d.width_m > 0.0) {
+                return Err(fault("door", i, "width_m", "must be positive".into()));
+            }
+            if d.rooms[0] == d.rooms[1] {
+                return Err(fault("door", i, "rooms", "two different rooms".into()));
+            }
+            let side = |name: &String| -> Result<DoorSide, PlanFault> {
+                let room = rooms
+                    .iter()
+                    .position(|r| &r.name == name)
+                    .ok_or_else(|| fault("door", i, "rooms", format!("no room {name:?}")))?;
+                let r = &rooms[room];
+                let at = Vector2::new(d.at_m[0] - r.origin_m[0], d.at_m[1] - r.origin_m[1]);
+                WallName::ALL
+                    .iter()
+                    .map(|&w| (w, WallGeometry::of(w, r.size_m)))
+                    .filter(|(_, g)| g.distance(&at).abs() <= DOOR_IN_WALL_M)
+                    .map(|(wall, g)| DoorSide {
+                        room,
+                        wall,
+                        along_m: g.position(&at),
+                    })
+                    .find(|s| {
+                        let len = WallGeometry::of(s.wall, r.size_m).length_m;
+                        s.along_m - d.width_m / 2.0 >= 0.0 && s.along_m + d.width_m / 2.0 <= len
+                    })
+                    .ok_or_else(|| {
+                        fault(
+                            "door",
+                            i,
+                            "at_m",
+                            format!(
+                                "not within {DOOR_IN_WALL_M} m of a wall of {name:?} with its \
+                                 {} m of width inside the wall",
+                                d.width_m
+                            ),
+                        )
+                    })
+            };
+            sides.push([side(&d.rooms[0])?, side(&d.rooms[1])?]);
+        }
+        Ok(FloorPlan {
+            rooms,
+            doors,
+            sides,
+        })
+    }
+
+    /// The rooms.
+    pub fn rooms(&self) -> &[PlanRoom] {
+        &self.rooms
+    }
+
+    /// The doors.
+    pub fn doors(&self) -> &[PlanDoor] {
+        &self.doors
+    }
+
+    /// The room named `name`.
+    pub fn room(&self, name: &str) -> Option<usize> {
+        self.rooms.iter().position(|r| r.name == name)
+    }
+
+    /// The doors of `room`: each door's index and where it lies there.
+    pub fn doors_of(&self, room: usize) -> impl Iterator<Item = (usize, DoorSide)> + '_ {
+        self.sides
+            .iter()
+            .enumerate()
+            .filter_map(move |(i, s)| s.iter().find(|s| s.room == room).map(|s| (i, *s)))
+    }
+
+    /// Where `door` lies in `room`, if it is one of its doors.
+    pub fn side(&self, door: usize, room: usize) -> Option<DoorSide> {
+        self.sides
+            .get(door)?
+            .iter()
+            .find(|s| s.room == room)
+            .copied()
+    }
+
+    /// The room beyond `door` seen from `room`.
+    pub fn beyond(&self, door: usize, room: usize) -> Option<usize> {
+        let s = self.sides.get(door)?;
+        match (s[0].room == room, s[1].room == room) {
+            (true, _) => Some(s[1].room),
+            (_, true) => Some(s[0].room),
+            _ => None,
+        }
+    }
+
+    /// The doors to pass, in order, to go from room `from` to room `to`
+    /// on the shortest way between door middles (Dijkstra; the robot's
+    /// own place in `from` is left out: rooms are small against a floor).
+    /// Empty when `from == to`; `None` when no way joins them.
+    pub fn route(&self, from: usize, to: usize) -> Option<Vec<usize>> {
+        if from == to {
+            return Some(Vec::new());
+        }
+        // Nodes: (door, room the robot stands in after passing it).
+        let n = self.doors.len();
+        let mut dist = vec![f64::INFINITY; 2 * n];
+        let mut prev: Vec<Option<usize>> = vec![None; 2 * n];
+        let node =
+            |door: usize, room: usize| 2 * door + usize::from(self.sides[door][1].room == room);
+        let mut open = BTreeSet::new();
+        for (d, _) in self.doors_of(from) {
+            let Some(r) = self.beyond(d, from) else {
+                continue;
+            };
+            let k = node(d, r);
+            dist[k] = 0.0;
+            open.insert((ordered(0.0), k));
+        }
+        while let Some((_, k)) = open.pop_first() {
+            let (door, room) = (k / 2, self.sides[k / 2][k % 2].room);
+            if room == to {
+                let mut path = vec![door];
+                let mut at = k;
+                while let Some(p) = prev[at] {
+                    path.push(p / 2);
+                    at = p;
+                }
+                path.reverse();
+                return Some(path);
+            }
+            let here = Vector2::from(self.doors[door].at_m);
+            for (next, _) in self.doors_of(room) {
+                let Some(r) = self.beyond(next, room) else {
+                    continue;
+                };
+                let m = node(next, r);
+                let d = dist[k] + (Vector2::from(self.doors[next].at_m) - here).norm();
+                if d < dist[m] {
+                    open.remove(&(ordered(dist[m]), m));
+                    dist[m] = d;
+                    prev[m] = Some(k);
+                    open.insert((ordered(d), m));
+                }
+            }
+        }
+        None
+    }
+
+    /// The pose in the frame of the room beyond `door` of a robot at
+    /// `pose` in the frame of `room`, which puts the door's middle at
+    /// `along_m` along its wall and is `size_m` in size (the filter's
+    /// estimate): the door anchors the two frames, so an error of the plan
+    /// elsewhere in the room does not carry over.
+    pub fn transfer(
+        &self,
+        door: usize,
+        room: usize,
+        pose: &Pose2,
+        along_m: f64,
+        size_m: [f64; 2],
+    ) -> Option<(usize, Pose2)> {
+        let here = self.side(door, room)?;
+        let next = self.beyond(door, room)?;
+        let (a, b) = (&self.rooms[room], &self.rooms[next]);
+        // The door's middle as the filter places it, and as the plan does.
+        let est = WallGeometry::of(here.wall, size_m).point(along_m, 0.0);
+        let plan = WallGeometry::of(here.wall, a.size_m).point(here.along_m, 0.0);
+        let p = pose.position().coords + (plan - est);
+        let shift = Vector2::from(a.origin_m) - Vector2::from(b.origin_m);
+        let q = p + shift;
+        Some((next, Pose2::new(q.x, q.y, pose.theta)))
+    }
+}
+
+/// An `f64` that orders (for the open set; distances are never NaN).
+fn ordered(v: f64) -> u64 {
+    v.max(0.0).to_bits()
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    /// A corridor 10 × 2 m with two offices north of it, the offices
+    /// joined by a door of their own, a wall 0.2 m thick between all.
+    fn plan() -> FloorPlan {
+        let room = |name: &str, origin_m, size_m| PlanRoom {
+            name: name.into(),
+            origin_m,
+            size_m,
+        };
+        let door = |a: &str, b: &str, at_m| PlanDoor {
+            rooms: [a.into(), b.into()],
+            at_m,
+            width_m: 1.0,
+        };
+        FloorPlan::new(
+            vec![
+                room("corridor", [0.0, 0.0], [10.0, 2.0]),
+                room("a", [0.0, 2.2], [4.9, 4.0]),
+                room("b", [5.1, 2.2], [4.9, 4.0]),
+            ],
+            vec![
+                door("corridor", "a", [2.0, 2.1]),
+                door("corridor", "b", [8.0, 2.1]),
+                door("a", "b", [5.0, 5.0]),
+            ],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn doors_are_placed_in_their_walls() {
+        let p = plan();
+        let s = p.side(0, 0).unwrap();
+        assert_eq!(s.wall, WallName::North);
+        assert!((s.along_m - 2.0).abs() < 1e-9, "{s:?}");
+        let s = p.side(0, 1).unwrap();
+        assert_eq!(s.wall, WallName::South);
+        assert!((s.along_m - 2.0).abs() < 1e-9);
+        assert_eq!(p.side(2, 1).unwrap().wall, WallName::East);
+        assert_eq!(p.side(2, 2).unwrap().wall, WallName::West);
+        assert_eq!(p.side(2, 0), None);
+    }
+
+    #[test]
+    fn routes_take_the_shortest_way_over_doors() {
+        let p = plan();
+        assert_eq!(p.route(0, 0), Some(vec![]));
+        assert_eq!(p.route(0, 1), Some(vec![0]));
+        assert_eq!(p.route(1, 2), Some(vec![2]));
+        assert_eq!(p.route(2, 1), Some(vec![2]));
+        // From the corridor to b: its own door, not through a.
+        assert_eq!(p.route(0, 2), Some(vec![1]));
+        // Without the door a–b, a to b is through the corridor.
+        let mut doors = p.doors().to_vec();
+        doors.pop();
+        let q = FloorPlan::new(p.rooms().to_vec(), doors).unwrap();
+        assert_eq!(q.route(1, 2), Some(vec![0, 1]));
+        // An island is no route.
+        let mut rooms = p.rooms().to_vec();
+        rooms.push(PlanRoom {
+            name: "island".into(),
+            origin_m: [20.0, 0.0],
+            size_m: [2.0, 2.0],
+        });
+        let q = FloorPlan::new(rooms, p.doors().to_vec()).unwrap();
+        assert_eq!(q.route(0, 3), None);
+    }
+
+    #[test]
+    fn a_pose_moves_to_the_next_room_anchored_on_the_door() {
+        let p = plan();
+        // Just beyond the corridor's door into a, heading north; the
+        // filter puts the door 3 cm east of the plan and the corridor
+        // 2 cm wider.
+        let pose = Pose2::new(2.0, 2.4, 1.5);
+        let (room, q) = p.transfer(0, 0, &pose, 2.03, [10.0, 2.02]).unwrap();
+        assert_eq!(room, 1);
+        // The door's middle: (2.03, 2.02) in the filter's corridor, so
+        // the robot is 3 cm west of it and 0.38 m beyond the wall line,
+        // i.e. 0.18 m into a (the wall is 0.2 m thick).
+        assert!((q.x - 1.97).abs() < 1e-9, "{q:?}");
+        assert!((q.y - 0.18).abs() < 1e-9, "{q:?}");
+        assert_eq!(q.theta, 1.5);
+        assert_eq!(p.transfer(0, 2, &pose, 0.0, [1.0, 1.0]), None);
+    }
+
+    #[test]
+    fn a_door_off_its_walls_is_refused_with_its_field() {
+        let p = plan();
+        let mut doors = p.doors().to_vec();
+        doors[1].at_m = [8.0, 1.0];
+        let e = FloorPlan::new(p.rooms().to_vec(), doors).unwrap_err();
+        assert_eq!((e.table, e.index, e.field), ("door", 1, "at_m"));
+        let mut doors = p.doors().to_vec();
+        doors[0].rooms[1] = "kitchen".into();
+        let e = FloorPlan::new(p.rooms().to_vec(), doors).unwrap_err();
+        assert_eq!((e.field, e.why.as_str()), ("rooms", "no room \"kitchen\""));
+        // A door too wide for its wall's length.
+        let mut doors = p.doors().to_vec();
+        doors[0].at_m = [0.3, 2.1];
+        let e = FloorPlan::new(p.rooms().to_vec(), doors).unwrap_err();
+        assert_eq!(e.field, "at_m");
+    }
+}

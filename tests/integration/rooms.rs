@@ -1,0 +1,51 @@
+//! Room to room on a floor plan (`missions/office-rounds.toml`): the
+//! robot goes from the corridor of the office floor into office A, through
+//! A's door into B, across the corridor into the lab and back, by
+//! `go_to_room` tasks. Its filter keeps one room's frame at a time; each
+//! door of the plan moves the frame into the next room. Asserted over
+//! several seeds: every task done, every move of the frame made when the
+//! robot truly stood in the room it moved into, the estimate within a few
+//! centimetres of the truth all the way.
+
+use std::path::Path;
+use stucco_cli::{TaskMissionJob, run_task_mission};
+
+#[test]
+fn go_to_room_takes_the_robot_round_the_office_floor() {
+    let runs = 4;
+    let s = run_task_mission(
+        &TaskMissionJob {
+            mission: Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/office-rounds.toml"),
+            seed: None,
+            runs: Some(runs),
+            out: None,
+            resume: false,
+            stop_after_s: None,
+            record: false,
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert_eq!(s.runs.len(), runs as usize);
+    let way = ["office-a", "office-b", "corridor", "lab", "corridor"];
+    for r in &s.runs {
+        let seed = r.seed;
+        assert_eq!(r.outcome, "done", "seed {seed}: {:?}", r.reason);
+        let entered: Vec<Option<&str>> = r.room_changes.iter().map(|c| c.room.as_deref()).collect();
+        assert_eq!(entered, way.map(Some), "seed {seed}");
+        for c in &r.room_changes {
+            assert_eq!(c.room, c.room_true, "seed {seed}: {c:?}");
+        }
+        assert_eq!(r.room.as_deref(), Some("corridor"));
+        assert_eq!(r.room_true.as_deref(), Some("corridor"));
+        assert!(r.pose_max_m < 0.05, "seed {seed}: {} m", r.pose_max_m);
+        assert!(r.pose_rms_m < 0.01, "seed {seed}: {} m", r.pose_rms_m);
+        eprintln!(
+            "seed {seed}: {:.0} s, position RMS {:.1} mm, max {:.1} mm, heading RMS {:.2}°",
+            r.sim_seconds,
+            r.pose_rms_m * 1e3,
+            r.pose_max_m * 1e3,
+            r.heading_rms_rad.to_degrees()
+        );
+    }
+}
