@@ -157,7 +157,15 @@ impl Layout {
                     height_m: room.height_m,
                 });
                 let cuts = openings_of(world, &room.name, i);
-                for c in &cuts {
+                // A wall another room builds has that room's openings in it
+                // too: a door the plan gives on the corridor's side is a
+                // hole on the office's side as well.
+                let seen_through = if room.shared_walls.contains(&i) {
+                    shared_cuts(world, &room.name, a, b)
+                } else {
+                    Vec::new()
+                };
+                for c in cuts.iter().chain(&seen_through) {
                     out.openings.push(TrueOpening {
                         kind: c.kind,
                         room: room.name.clone(),
@@ -375,4 +383,40 @@ fn legged(out: &mut Vec<Solid>, t: &TableSpec) {
             z: [0.0, t.height_m - top],
         });
     }
+}
+
+/// The openings of the walls of other rooms that build the wall `a`–`b`
+/// (inner face) of `room`: facing it, at most a thick wall's depth behind
+/// it. Their spans measured along `a`–`b`; those off its length dropped.
+fn shared_cuts(world: &WorldSpec, room: &str, a: Point2<f64>, b: Point2<f64>) -> Vec<Cut> {
+    /// Deepest a wall between two rooms is taken to be, m.
+    const DEPTH_M: f64 = 0.5;
+    let len = (b - a).norm();
+    let u = (b - a) / len;
+    let out_n = Vector2::new(u.y, -u.x);
+    let mut cuts = Vec::new();
+    for other in world.rooms.iter().filter(|r| r.name != room) {
+        let n = other.corners.len();
+        for j in 0..n {
+            let (c0, c1) = (other.corners[j], other.corners[(j + 1) % n]);
+            let (p, q) = (Point2::new(c0[0], c0[1]), Point2::new(c1[0], c1[1]));
+            let v = (q - p).normalize();
+            let behind = (p - a).dot(&out_n);
+            if v.dot(&u) > -0.999 || !(0.0..=DEPTH_M).contains(&behind) {
+                continue;
+            }
+            for c in openings_of(world, &other.name, j) {
+                let s = |t: f64| (p + v * t - a).dot(&u);
+                let (s0, s1) = (s(c.s0).min(s(c.s1)), s(c.s0).max(s(c.s1)));
+                if s1 > 0.0 && s0 < len {
+                    cuts.push(Cut {
+                        s0: s0.max(0.0),
+                        s1: s1.min(len),
+                        ..c
+                    });
+                }
+            }
+        }
+    }
+    cuts
 }

@@ -19,3 +19,39 @@ fn every_world_file_parses_and_builds() {
     names.sort();
     assert_eq!(names, ["apartment", "corridor", "floor", "reference room"]);
 }
+
+/// A door written on one room's wall is a hole in the wall of the room
+/// that shares it too (the office floor's doors are written on the
+/// corridor's side): its plaster and its openings are those of both
+/// faces.
+#[test]
+fn a_door_is_an_opening_of_both_rooms_that_share_its_wall() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/worlds/floor.toml");
+    let layout = stucco_sim::Layout::of(&WorldSpec::load(std::path::Path::new(path)).unwrap());
+    let doors_of = |room: &str| {
+        let mut v: Vec<(usize, [f64; 2])> = layout
+            .openings
+            .iter()
+            .filter(|o| o.room == room)
+            .map(|o| {
+                let c = nalgebra::center(&o.edges[0], &o.edges[1]);
+                (
+                    o.wall,
+                    [(c.x * 100.0).round() / 100.0, (c.y * 100.0).round() / 100.0],
+                )
+            })
+            .collect();
+        v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        v
+    };
+    // Office A: its own door to B (east wall, 1) and the corridor's door
+    // in its south wall (0), on A's face of it; its window (north, 2).
+    assert_eq!(
+        doors_of("office-a"),
+        [(0, [2.5, 3.15]), (1, [5.0, 5.5]), (2, [2.8, 7.0])]
+    );
+    // B shares A's east wall (its west, 3) and the corridor's north wall.
+    assert_eq!(doors_of("office-b"), [(0, [8.0, 3.15]), (3, [5.15, 5.5])]);
+    // The lab, south of the corridor: the corridor's south door.
+    assert_eq!(doors_of("lab"), [(2, [4.0, -0.15])]);
+}

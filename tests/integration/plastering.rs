@@ -7,14 +7,18 @@
 use std::path::{Path, PathBuf};
 use stucco_cli::{MissionReport, TaskMissionJob, run_task_mission};
 
-fn mission() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../missions/demo.toml")
+fn mission(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../missions/{name}.toml"))
 }
 
 fn run(out: &Path, resume: bool, stop_after_s: Option<f64>) -> MissionReport {
+    run_file("demo", out, resume, stop_after_s)
+}
+
+fn run_file(name: &str, out: &Path, resume: bool, stop_after_s: Option<f64>) -> MissionReport {
     let s = run_task_mission(
         &TaskMissionJob {
-            mission: mission(),
+            mission: mission(name),
             seed: None,
             runs: None,
             out: Some(out.to_owned()),
@@ -56,7 +60,10 @@ fn assert_targets(r: &MissionReport) {
     assert!(r.windows_total >= 1);
     let edge = r.window_edge_err_max_m.unwrap();
     assert!(edge <= 0.02, "window edges {edge}");
-    // What the sofa hides is reported, never silently dropped.
+}
+
+/// What the sofa hides is reported, never silently dropped.
+fn assert_sofa_reported(r: &MissionReport) {
     let plaster = r.plaster.as_ref().unwrap();
     assert!(plaster.unreachable_m2 > 5.0, "{}", plaster.unreachable_m2);
 }
@@ -67,6 +74,7 @@ fn the_living_room_is_plastered_within_the_targets() {
     let r = run(dir.path(), false, None);
     assert_eq!(r.outcome, "done", "{:?}", r.reason);
     assert_targets(&r);
+    assert_sofa_reported(&r);
     let (t, bound) = (
         r.mission_time_s.unwrap(),
         r.mission_time_lower_bound_s.unwrap(),
@@ -100,6 +108,52 @@ fn a_plastering_run_killed_and_resumed_sprays_nothing_twice() {
     assert_eq!(resumed.first_task, 2);
     // The whole job's coat: the first run's plaster stayed on the walls.
     assert_targets(&resumed);
+    assert_sofa_reported(&resumed);
+}
+
+/// The two-room job (`missions/two-offices.toml`): from the corridor into
+/// office A, mapped and plastered round its table and window, through
+/// the door between the offices into B, mapped and plastered round its
+/// cabinet; both rooms within every target, scored on the true walls of
+/// each, the mission time against the sum of both rooms' bounds.
+#[test]
+fn two_offices_are_plastered_one_after_the_other_within_the_targets() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run_file("two-offices", dir.path(), false, None);
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    assert_targets(&r);
+    let rooms: Vec<&str> = r
+        .plaster
+        .as_ref()
+        .unwrap()
+        .rooms
+        .iter()
+        .map(|p| p.room.as_str())
+        .collect();
+    assert_eq!(rooms, ["office-a", "office-b"]);
+    for p in &r.plaster.as_ref().unwrap().rooms {
+        for s in &p.surfaces {
+            assert!(s.coverage_pct >= 99.5, "{}: {s:?}", p.room);
+        }
+    }
+    let (t, bound) = (
+        r.mission_time_s.unwrap(),
+        r.mission_time_lower_bound_s.unwrap(),
+    );
+    assert!(t <= 1.25 * bound, "{t} s against a bound of {bound} s");
+    for name in ["coat-office-a-north.svg", "coat-office-b-ceiling.svg"] {
+        assert!(dir.path().join(name).exists(), "{name}");
+    }
+    eprintln!(
+        "two offices: walls {:.2}%, ceiling {:.2}%, overspray {:.3}%, CV {:.2}%, \
+         window edges {:.1} cm, {t:.0} s against {bound:.0} s ({:.3})",
+        r.wall_coverage_pct.unwrap(),
+        r.ceiling_coverage_pct.unwrap(),
+        r.overspray_pct.unwrap(),
+        100.0 * r.thickness_cv.unwrap(),
+        100.0 * r.window_edge_err_max_m.unwrap(),
+        t / bound
+    );
 }
 
 /// A `[spray]` table the tool cannot lay its coat with, or a `plaster`

@@ -46,7 +46,9 @@ pub use logging::init_logging;
 pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
 pub use navigator::{DT_S, Navigator};
 pub use op::{BenchReport, CommandResult, EventFeed, Operator};
-pub use plastering::{PlasterReport, PredictedScores, WorldState, sprayer_of, time_lower_bound};
+pub use plastering::{
+    PlasterReport, PredictedScores, RoomPlaster, WorldState, sprayer_of, time_lower_bound,
+};
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{RobotJob, RobotRun, RobotState, run_robot};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};

@@ -102,6 +102,10 @@ impl RoomView {
     }
 }
 
+/// The windows found in one room: the plan's name of the room, and the
+/// windows wall by wall.
+pub type RoomWindows<'a> = (Option<&'a str>, Vec<(WallName, Window)>);
+
 /// Ceiling heights kept for the median.
 const CEILING_SAMPLES: usize = 400;
 /// Cells of the floor map, m.
@@ -247,6 +251,7 @@ impl Navigator {
         let set: std::collections::BTreeSet<(i64, i64)> = cells.iter().copied().collect();
         let mut seen = std::collections::BTreeSet::new();
         let mut out = Vec::new();
+        let [xs, ys] = self.room.ekf.now().0.fixed_rows::<2>(3).into();
         for &c in &cells {
             if !seen.insert(c) {
                 continue;
@@ -266,11 +271,15 @@ impl Navigator {
                 }
             }
             let f = FLOOR_CELL_M;
-            let mut min = [lo.0 as f64 * f, lo.1 as f64 * f];
-            let mut max = [(hi.0 + 1) as f64 * f, (hi.1 + 1) as f64 * f];
+            let (min, max) = (
+                [lo.0 as f64 * f, lo.1 as f64 * f],
+                [(hi.0 + 1) as f64 * f, (hi.1 + 1) as f64 * f],
+            );
+            // A leg: small both ways, as the laser sees it.
+            let leg = (max[0] - min[0]).max(max[1] - min[1]) < LEG_M;
+            let (mut min, mut max) = (min, max);
             // The laser sees a face: what lies between it and a wall less
             // than a metre behind is taken as part of it.
-            let [xs, ys] = self.room.ekf.now().0.fixed_rows::<2>(3).into();
             if min[0] < 1.0 {
                 min[0] = 0.0;
             }
@@ -283,42 +292,17 @@ impl Navigator {
             if max[1] > ys - 1.0 {
                 max[1] = ys;
             }
-            out.push(Obstacle {
-                min_m: min,
-                max_m: max,
-                height_m: OBSTACLE_HEIGHT_M,
-            });
+            out.push((
+                Obstacle {
+                    min_m: min,
+                    max_m: max,
+                    height_m: OBSTACLE_HEIGHT_M,
+                },
+                leg,
+            ));
         }
-        // Pieces nearer each other than the robot is wide (a table's legs,
-        // chairs round it) stand as one: the robot cannot pass between
-        // them, and what stands on them (a table's top) is above the
-        // laser's plane.
-        loop {
-            let pair = (0..out.len())
-                .flat_map(|i| (i + 1..out.len()).map(move |j| (i, j)))
-                .find(|&(i, j)| {
-                    let (a, b) = (&out[i], &out[j]);
-                    let dx = (a.min_m[0] - b.max_m[0])
-                        .max(b.min_m[0] - a.max_m[0])
-                        .max(0.0);
-                    let dy = (a.min_m[1] - b.max_m[1])
-                        .max(b.min_m[1] - a.max_m[1])
-                        .max(0.0);
-                    let thin = |o: &Obstacle| {
-                        (o.max_m[0] - o.min_m[0]).min(o.max_m[1] - o.min_m[1]) < LEG_M
-                    };
-                    let gap = dx.hypot(dy);
-                    gap < FURNITURE_GAP_M || (thin(a) && thin(b) && gap < TABLE_SPAN_M)
-                });
-            let Some((i, j)) = pair else {
-                break;
-            };
-            let b = out.swap_remove(j);
-            let a = &mut out[i];
-            a.min_m = [a.min_m[0].min(b.min_m[0]), a.min_m[1].min(b.min_m[1])];
-            a.max_m = [a.max_m[0].max(b.max_m[0]), a.max_m[1].max(b.max_m[1])];
-        }
-        out
+        merge_furniture(&mut out);
+        out.into_iter().map(|(o, _)| o).collect()
     }
 
     /// Counts the scan's echoes that lie inside the room, off its walls,
@@ -640,15 +624,25 @@ impl Navigator {
 
     /// The windows found by the camera, wall by wall.
     pub fn windows(&self) -> Vec<(WallName, Window)> {
-        WallName::ALL
-            .iter()
-            .flat_map(|&w| {
-                self.room.windows[w.index()]
-                    .windows()
-                    .iter()
-                    .map(move |x| (w, *x))
-            })
-            .collect()
+        room_windows(&self.room)
+    }
+
+    /// The windows found in every room the robot has been in: the plan's
+    /// name of the room (none without a plan: the one room), wall by wall.
+    pub fn windows_by_room(&self) -> Vec<RoomWindows<'_>> {
+        let name = |r: usize| {
+            self.plan
+                .as_ref()
+                .and_then(|(plan, _, _)| plan.rooms().get(r))
+                .map(|r| r.name.as_str())
+        };
+        let mut out = vec![(self.room_name(), room_windows(&self.room))];
+        out.extend(
+            self.parked
+                .iter()
+                .map(|(&r, view)| (name(r), room_windows(view))),
+        );
+        out
     }
 
     /// Hands a camera profile to the window finder of the wall it looks
@@ -822,6 +816,19 @@ impl Navigator {
     }
 }
 
+/// The windows found in `view`'s room, wall by wall.
+fn room_windows(view: &RoomView) -> Vec<(WallName, Window)> {
+    WallName::ALL
+        .iter()
+        .flat_map(|&w| {
+            view.windows[w.index()]
+                .windows()
+                .iter()
+                .map(move |x| (w, *x))
+        })
+        .collect()
+}
+
 /// Puts the doors the plan has in `room` into `view`'s filter, `sigma_m`
 /// uncertain, except those it holds already.
 fn add_plan_doors(view: &mut RoomView, plan: &FloorPlan, room: usize, sigma_m: f64) {
@@ -834,5 +841,39 @@ fn add_plan_doors(view: &mut RoomView, plan: &FloorPlan, room: usize, sigma_m: f
             plan_door: Some(door),
         };
         view.add_door(side.wall.index(), side.along_m, sigma_m, info);
+    }
+}
+
+/// Joins pieces of furniture nearer each other than the robot is wide
+/// (chairs round a table) into one: the robot cannot pass between them.
+/// Thin pieces (a row of legs), and legs (each piece flagged so: small both
+/// ways as the laser saw it, before it was stretched to a wall) with
+/// legs, join over a table's span: what stands on them (a table's top) is
+/// above the laser's plane.
+fn merge_furniture(out: &mut Vec<(Obstacle, bool)>) {
+    let thin = |o: &Obstacle| (o.max_m[0] - o.min_m[0]).min(o.max_m[1] - o.min_m[1]) < LEG_M;
+    loop {
+        let pair = (0..out.len())
+            .flat_map(|i| (i + 1..out.len()).map(move |j| (i, j)))
+            .find(|&(i, j)| {
+                let ((a, a_leg), (b, b_leg)) = (&out[i], &out[j]);
+                let dx = (a.min_m[0] - b.max_m[0])
+                    .max(b.min_m[0] - a.max_m[0])
+                    .max(0.0);
+                let dy = (a.min_m[1] - b.max_m[1])
+                    .max(b.min_m[1] - a.max_m[1])
+                    .max(0.0);
+                let gap = dx.hypot(dy);
+                let legs = (thin(a) || *a_leg) && (thin(b) || *b_leg);
+                gap < FURNITURE_GAP_M || (legs && gap < TABLE_SPAN_M)
+            });
+        let Some((i, j)) = pair else {
+            break;
+        };
+        let (b, b_leg) = out.swap_remove(j);
+        let (a, a_leg) = &mut out[i];
+        a.min_m = [a.min_m[0].min(b.min_m[0]), a.min_m[1].min(b.min_m[1])];
+        a.max_m = [a.max_m[0].max(b.max_m[0]), a.max_m[1].max(b.max_m[1])];
+        *a_leg = *a_leg && b_leg;
     }
 }

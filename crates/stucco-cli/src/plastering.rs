@@ -114,18 +114,34 @@ pub(crate) fn room_coats(
         .collect()
 }
 
-/// What a plastering run reports beyond the top-level scores.
+/// What a plastering run reports beyond the top-level scores (which sum
+/// every room plastered).
 #[derive(Clone, Debug, Serialize)]
 pub struct PlasterReport {
-    /// Stations planned.
+    /// Stations planned, in all rooms.
     pub stations: usize,
-    /// Each surface's scores, on the truth.
-    pub surfaces: Vec<SurfaceScore>,
-    /// Plasterable area the plan left unreached, m² (reported, not
+    /// Plasterable area the plans left unreached, m² (reported, not
     /// scored).
     pub unreachable_m2: f64,
     /// Plaster sprayed, litres.
     pub sprayed_l: f64,
+    /// Each room plastered, in the order of its `plaster` task.
+    pub rooms: Vec<RoomPlaster>,
+}
+
+/// One room's plastering.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoomPlaster {
+    /// The room (the world's name for it).
+    pub room: String,
+    /// The `plaster` task.
+    pub task: usize,
+    /// Stations planned.
+    pub stations: usize,
+    /// Plasterable area the plan left unreached, m².
+    pub unreachable_m2: f64,
+    /// Each surface's scores, on the truth.
+    pub surfaces: Vec<SurfaceScore>,
     /// What the plan itself predicted, on the room as the robot knew it.
     pub predicted: PredictedScores,
 }
@@ -141,28 +157,42 @@ pub struct PredictedScores {
     pub thickness_cv: f64,
 }
 
-/// Scores the plaster the simulator laid in the robot's room against the
-/// plan's reach (what the plan reports unreachable is not counted), less
-/// the robot's position tolerance along the reach's borders: the map's
-/// frame, where the plan was made, may sit that far off the true one.
+/// Each room's surfaces scored (see [`score_surfaces`]) and all of them
+/// summed, over what the simulator sprayed in the run.
 pub(crate) fn score_run(
+    sim: &Simulator,
+    layout: &Layout,
+    rooms: &[(&RoomFrame, &Plan)],
+) -> (RoomScore, Vec<Vec<SurfaceScore>>) {
+    let each: Vec<Vec<SurfaceScore>> = rooms
+        .iter()
+        .map(|(frame, plan)| score_surfaces(sim, layout, frame, plan))
+        .collect();
+    let all = each.iter().flatten().cloned().collect();
+    (RoomScore::of(all, sim.sprayed_m3() * 1000.0), each)
+}
+
+/// The plaster the simulator laid in one room, surface by surface,
+/// against the plan's reach (what the plan reports unreachable is not
+/// counted), less the robot's position tolerance along the reach's
+/// borders: the map's frame, where the plan was made, may sit that far
+/// off the true one.
+fn score_surfaces(
     sim: &Simulator,
     layout: &Layout,
     frame: &RoomFrame,
     plan: &Plan,
-) -> RoomScore {
+) -> Vec<SurfaceScore> {
     let room = true_room(layout, frame);
     let grids = room_coats(sim.coats(), frame, &room);
-    let scores = room
-        .surfaces()
+    room.surfaces()
         .iter()
         .zip(&grids)
         .filter_map(|(s, g)| {
             let reach = plan.reach_of(s.id)?.eroded(plan.tool.position_tolerance_m);
             Some(score(s, g, &reach, &plan.tool))
         })
-        .collect();
-    RoomScore::of(scores, sim.sprayed_m3() * 1000.0)
+        .collect()
 }
 
 /// The least time plastering can take: the least area any plan must spray
@@ -256,6 +286,7 @@ impl WorldState {
 /// double (red), openings outlined.
 pub(crate) fn draw_coats(
     dir: &Path,
+    prefix: &str,
     layout: &Layout,
     frame: &RoomFrame,
     sim: &Simulator,
@@ -268,7 +299,7 @@ pub(crate) fn draw_coats(
             SurfaceId::Ceiling => "ceiling",
             SurfaceId::Wall(_) => s.id.name(),
         };
-        let path = dir.join(format!("coat-{name}.svg"));
+        let path = dir.join(format!("coat-{prefix}{name}.svg"));
         let [su, sv] = s.size_m();
         let px = 160.0;
         let size = ((su * px) as u32 + 80, (sv * px) as u32 + 70);

@@ -70,6 +70,8 @@ pub struct DoorReport {
 /// A window the camera found, against the true window it overlaps.
 #[derive(Clone, Debug, Serialize)]
 pub struct WindowReport {
+    /// The room (the world's name for it).
+    pub room: String,
     /// The wall.
     pub wall: WallName,
     /// Its edges along the wall, m.
@@ -419,6 +421,7 @@ pub fn run_task_mission(
 /// The room a robot at `at` (world frame) stands in, as the simulator
 /// knows it: its name, its south-west corner (the origin of the room frame
 /// the robot's filter keeps) and its size.
+#[derive(Clone, Debug)]
 pub(crate) struct RoomFrame {
     pub name: String,
     pub origin: [f64; 2],
@@ -655,9 +658,11 @@ fn run_once(
         std::collections::BTreeMap::new();
     let limit = mission.time_limit_s;
     let mut step = 0usize;
-    let mut plan_seen: Option<stucco_plan::Plan> = None;
     let mut room_changes = Vec::new();
-    let mut plaster_start: Option<Pose2> = None;
+    // Each plaster task's plan, the true frame of its room, and where the
+    // robot stood when it was first made.
+    let mut plans: std::collections::BTreeMap<usize, (RoomFrame, stucco_plan::Plan, Pose2)> =
+        std::collections::BTreeMap::new();
     loop {
         let now = nav.now();
         let est = nav.mission_estimate();
@@ -699,19 +704,21 @@ fn run_once(
         if out_.checkpoint_due {
             save(&exec, &nav)?;
         }
-        // The plan scored is the last one made (a survey makes it again).
-        if out_
-            .events
-            .iter()
-            .any(|e| matches!(e.kind, EventKind::PlanMade { .. }))
-        {
-            plan_seen = exec.plaster_plan().cloned();
-            if plaster_start.is_none() {
-                plaster_start = Some(nav.mission_estimate().pose);
-            }
-        }
-        if plan_seen.is_none() && resume.is_some() {
-            plan_seen = exec.plaster_plan().cloned();
+        // The plan scored is each task's last one (a survey makes it
+        // again); a resumed run's, the one it took up.
+        let made = out_.events.iter().find_map(|e| match e.kind {
+            EventKind::PlanMade { task, .. } => Some(task),
+            _ => None,
+        });
+        let taken_up = resume
+            .and_then(|cp| cp.progress.plaster.as_ref())
+            .map(|p| p.task)
+            .filter(|t| !plans.contains_key(t));
+        if let (Some(task), Some(plan)) = (made.or(taken_up), exec.plaster_plan()) {
+            let start = plans
+                .get(&task)
+                .map_or(nav.mission_estimate().pose, |p| p.2);
+            plans.insert(task, (frame.clone(), plan.clone(), start));
         }
         if let Some(door) = out_.enter_room {
             // The executive checks on its next tick that the frame moved.
@@ -824,95 +831,63 @@ fn run_once(
             }
         })
         .collect();
-    // True windows of the room, in the room frame: wall, along-range, z.
-    let true_windows: Vec<(WallName, [f64; 2], [f64; 2])> = layout
-        .openings
-        .iter()
-        .filter(|o| {
-            o.room == frame.name
-                && matches!(o.kind, OpeningKind::Window | OpeningKind::GlazedWindow)
-        })
-        .filter_map(|o| {
-            let e: Vec<nalgebra::Vector2<f64>> = o
-                .edges
-                .iter()
-                .map(|p| nalgebra::Vector2::new(p.x - frame.origin[0], p.y - frame.origin[1]))
-                .collect();
-            let mid = (e[0] + e[1]) / 2.0;
-            WallName::ALL.iter().find_map(|&w| {
-                let g = WallGeometry::of(w, frame.size_m);
-                (g.distance(&mid).abs() < 0.2).then(|| {
-                    let (a, b) = (g.position(&e[0]), g.position(&e[1]));
-                    (w, [a.min(b), a.max(b)], o.z)
-                })
-            })
-        })
-        .collect();
-    // Openings reaching the floor are doors, not windows.
-    let windows: Vec<WindowReport> = nav
-        .windows()
-        .into_iter()
-        .filter(|(_, w)| w.sill_head_m[0] >= DOOR_SILL_M)
-        .map(|(wall, w)| {
-            let truth = true_windows.iter().find(|(tw, a, z)| {
-                *tw == wall
-                    && a[0] < w.along_m[1]
-                    && w.along_m[0] < a[1]
-                    && z[0] < w.sill_head_m[1]
-                    && w.sill_head_m[0] < z[1]
-            });
-            WindowReport {
-                wall,
-                along_m: w.along_m,
-                sill_head_m: w.sill_head_m,
-                observations: w.observations,
-                edge_error_m: truth.map(|(_, a, z)| {
-                    [
-                        w.along_m[0] - a[0],
-                        w.along_m[1] - a[1],
-                        w.sill_head_m[0] - z[0],
-                        w.sill_head_m[1] - z[1],
-                    ]
-                    .iter()
-                    .fold(0.0, |m: f64, e| m.max(e.abs()))
-                }),
-            }
-        })
-        .collect();
-    let windows_found = true_windows
-        .iter()
-        .filter(|(tw, a, z)| {
-            windows.iter().any(|w| {
-                w.wall == *tw
-                    && a[0] < w.along_m[1]
-                    && w.along_m[0] < a[1]
-                    && z[0] < w.sill_head_m[1]
-                    && w.sill_head_m[0] < z[1]
-            })
-        })
-        .count();
+    // Every room the robot has been in, each in its true frame.
+    let mut windows = Vec::new();
+    let (mut windows_found, mut windows_total) = (0, 0);
+    for (room, found) in nav.windows_by_room() {
+        let room_frame = match room {
+            Some(name) => RoomFrame::named(&layout, name)?,
+            None => frame.clone(),
+        };
+        let (reports, hit, total) = score_windows(&layout, &room_frame, found);
+        windows.extend(reports);
+        windows_found += hit;
+        windows_total += total;
+    }
     let window_edge_err_max_m = windows
         .iter()
         .filter_map(|w| w.edge_error_m)
         .reduce(f64::max);
-    let plastered = plan_seen.as_ref().map(|plan| {
-        let score = crate::plastering::score_run(nav.sim(), &layout, &frame, plan);
-        let predicted = stucco_plan::predicted_score(plan);
-        let index = exec
-            .tasks()
+    let plastered = (!plans.is_empty()).then(|| {
+        let rooms: Vec<(&RoomFrame, &stucco_plan::Plan)> =
+            plans.values().map(|(f, p, _)| (f, p)).collect();
+        let (score, each) = crate::plastering::score_run(nav.sim(), &layout, &rooms);
+        let top = stucco_sim::SimConfig::default().vehicle.max_speed_mps;
+        let seconds = plans.keys().map(|&t| task_seconds[t]).sum::<Option<f64>>();
+        let bound: f64 = plans
+            .values()
+            .map(|(_, plan, start)| crate::plastering::time_lower_bound(plan, start, top))
+            .sum();
+        let rooms: Vec<crate::plastering::RoomPlaster> = plans
             .iter()
-            .position(|t| matches!(t, TaskSpec::Plaster { .. }));
-        let seconds = index.and_then(|i| task_seconds[i]);
-        let start = plaster_start.unwrap_or(est.pose);
-        let bound = crate::plastering::time_lower_bound(
-            plan,
-            &start,
-            stucco_sim::SimConfig::default().vehicle.max_speed_mps,
-        );
-        (score, predicted, seconds, bound, plan.stations.len())
+            .zip(each)
+            .map(|((&task, (frame, plan, _)), surfaces)| {
+                let predicted = stucco_plan::predicted_score(plan);
+                crate::plastering::RoomPlaster {
+                    room: frame.name.clone(),
+                    task,
+                    stations: plan.stations.len(),
+                    unreachable_m2: plan.unreachable.iter().map(|u| u.area_m2).sum(),
+                    surfaces,
+                    predicted: crate::plastering::PredictedScores {
+                        wall_coverage_pct: predicted.wall_coverage_pct,
+                        ceiling_coverage_pct: predicted.ceiling_coverage_pct,
+                        thickness_cv: predicted.thickness_cv,
+                    },
+                }
+            })
+            .collect();
+        (score, rooms, seconds, bound)
     });
-    if let (Some(dir), Some(plan)) = (out, plan_seen.as_ref()) {
-        crate::plastering::draw_coats(dir, &layout, &frame, nav.sim(), &plan.tool)?;
+    if let Some(dir) = out {
+        for (frame, plan, _) in plans.values() {
+            let prefix = if plans.len() > 1 {
+                format!("{}-", frame.name)
+            } else {
+                String::new()
+            };
+            crate::plastering::draw_coats(dir, &prefix, &layout, frame, nav.sim(), &plan.tool)?;
+        }
     }
     let wall = t0.elapsed().as_secs_f64();
     let sim = nav.now().as_secs_f64();
@@ -970,7 +945,7 @@ fn run_once(
             .collect(),
         windows,
         windows_found,
-        windows_total: true_windows.len(),
+        windows_total,
         window_edge_err_max_m,
         path_length_m: trace.length,
         safety_stops,
@@ -982,20 +957,11 @@ fn run_once(
         double_sprayed_pct: plastered.as_ref().map(|p| p.0.over_pct),
         mission_time_s: plastered.as_ref().and_then(|p| p.2),
         mission_time_lower_bound_s: plastered.as_ref().map(|p| p.3),
-        plaster: plastered.map(|(score, predicted, _, _, stations)| {
-            crate::plastering::PlasterReport {
-                stations,
-                unreachable_m2: plan_seen
-                    .as_ref()
-                    .map_or(0.0, |p| p.unreachable.iter().map(|u| u.area_m2).sum()),
-                sprayed_l: score.sprayed_l,
-                surfaces: score.surfaces,
-                predicted: crate::plastering::PredictedScores {
-                    wall_coverage_pct: predicted.wall_coverage_pct,
-                    ceiling_coverage_pct: predicted.ceiling_coverage_pct,
-                    thickness_cv: predicted.thickness_cv,
-                },
-            }
+        plaster: plastered.map(|(score, rooms, _, _)| crate::plastering::PlasterReport {
+            stations: rooms.iter().map(|r| r.stations).sum(),
+            unreachable_m2: rooms.iter().map(|r| r.unreachable_m2).sum(),
+            sprayed_l: score.sprayed_l,
+            rooms,
         }),
     };
     if let Some(dir) = out {
@@ -1182,4 +1148,85 @@ pub(crate) fn mission_room(mission: &Mission, resume: Option<&RoomMap>) -> Resul
 /// doorway's thickness).
 fn true_room(layout: &Layout, at: &Pose2) -> Option<String> {
     RoomFrame::of(layout, at).ok().map(|f| f.name)
+}
+
+/// The windows the camera found in the room of `frame` (its frame)
+/// against the room's true windows: each one's report, and how many of
+/// the true ones were found out of how many there are. A true window is
+/// found when a reported one overlaps it; openings reaching the floor are
+/// doors, not windows.
+fn score_windows(
+    layout: &Layout,
+    frame: &RoomFrame,
+    found: Vec<(WallName, stucco_nav::Window)>,
+) -> (Vec<WindowReport>, usize, usize) {
+    // Wall, along-range, z.
+    let truth: Vec<(WallName, [f64; 2], [f64; 2])> = layout
+        .openings
+        .iter()
+        .filter(|o| {
+            o.room == frame.name
+                && matches!(o.kind, OpeningKind::Window | OpeningKind::GlazedWindow)
+        })
+        .filter_map(|o| {
+            let e: Vec<nalgebra::Vector2<f64>> = o
+                .edges
+                .iter()
+                .map(|p| nalgebra::Vector2::new(p.x - frame.origin[0], p.y - frame.origin[1]))
+                .collect();
+            let mid = (e[0] + e[1]) / 2.0;
+            WallName::ALL.iter().find_map(|&w| {
+                let g = WallGeometry::of(w, frame.size_m);
+                (g.distance(&mid).abs() < 0.2).then(|| {
+                    let (a, b) = (g.position(&e[0]), g.position(&e[1]));
+                    (w, [a.min(b), a.max(b)], o.z)
+                })
+            })
+        })
+        .collect();
+    let overlaps = |tw: WallName, a: &[f64; 2], z: &[f64; 2], wall, w: &stucco_nav::Window| {
+        tw == wall
+            && a[0] < w.along_m[1]
+            && w.along_m[0] < a[1]
+            && z[0] < w.sill_head_m[1]
+            && w.sill_head_m[0] < z[1]
+    };
+    let windows: Vec<(WallName, stucco_nav::Window)> = found
+        .into_iter()
+        .filter(|(_, w)| w.sill_head_m[0] >= DOOR_SILL_M)
+        .collect();
+    let reports = windows
+        .iter()
+        .map(|(wall, w)| {
+            let hit = truth
+                .iter()
+                .find(|(tw, a, z)| overlaps(*tw, a, z, *wall, w));
+            WindowReport {
+                room: frame.name.clone(),
+                wall: *wall,
+                along_m: w.along_m,
+                sill_head_m: w.sill_head_m,
+                observations: w.observations,
+                edge_error_m: hit.map(|(_, a, z)| {
+                    [
+                        w.along_m[0] - a[0],
+                        w.along_m[1] - a[1],
+                        w.sill_head_m[0] - z[0],
+                        w.sill_head_m[1] - z[1],
+                    ]
+                    .iter()
+                    .fold(0.0, |m: f64, e| m.max(e.abs()))
+                }),
+            }
+        })
+        .collect();
+    let hit = truth
+        .iter()
+        .filter(|(tw, a, z)| {
+            windows
+                .iter()
+                .any(|(wall, w)| overlaps(*tw, a, z, *wall, w))
+        })
+        .count();
+    (reports, hit, truth.len())
 }

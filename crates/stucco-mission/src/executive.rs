@@ -1506,7 +1506,7 @@ impl Executive {
         let Some(run) = a.plaster.as_mut() else {
             return TaskStep::Failed("plaster: no plan".to_owned());
         };
-        if run.finished() {
+        if run.finished() && !matches!(run.phase, Phase::Leaving) {
             return TaskStep::Done;
         }
         let park = ToolCommand {
@@ -1540,6 +1540,13 @@ impl Executive {
                 a.queue.extend(way);
                 self.tool = park;
                 TaskStep::Drive(DriveCommand::STOP)
+            }
+            Phase::Leaving => {
+                self.tool = park;
+                match step_behaviours(a, now, est, &vehicle, &mut self.events) {
+                    Some(cmd) => TaskStep::Drive(cmd),
+                    None => TaskStep::Done,
+                }
             }
             Phase::Moving => {
                 if let Some(cmd) = step_behaviours(a, now, est, &vehicle, &mut self.events) {
@@ -1675,7 +1682,11 @@ impl Executive {
                     }
                     if run.finished() {
                         self.tool = park;
-                        return TaskStep::Done;
+                        let last = run.plan.stations.len().saturating_sub(1);
+                        a.queue
+                            .extend(lane_exit(&gains, clearance, run, last, &est.pose, speed));
+                        run.phase = Phase::Leaving;
+                        return TaskStep::Drive(DriveCommand::STOP);
                     }
                     if station_done {
                         let k = run.cursor.station;
@@ -2096,23 +2107,36 @@ fn survey_way(
     } else {
         (clearance, xs - clearance, ends, ys - ends)
     };
-    // Keep each side of the loop off the furniture near its wall.
+    // Keep the loop off the furniture near the walls: each piece moves
+    // the side it stands before in; of two (a piece in a corner), the one
+    // that costs the loop least (either alone clears it).
     for o in &est.obstacles {
         let (cx, cy) = (
             0.5 * (o.min_m[0] + o.max_m[0]),
             0.5 * (o.min_m[1] + o.max_m[1]),
         );
+        let (w, h) = (x1 - x0, y1 - y0);
+        // (loss of area, side, new place)
+        let mut moves: Vec<(f64, usize, f64)> = Vec::new();
         if cx < 0.5 * xs && o.max_m[0] + half_x > x0 && o.max_m[0] < 0.5 * xs {
-            x0 = o.max_m[0] + half_x;
+            moves.push(((o.max_m[0] + half_x - x0) * h, 0, o.max_m[0] + half_x));
         }
         if cx > 0.5 * xs && o.min_m[0] - half_x < x1 && o.min_m[0] > 0.5 * xs {
-            x1 = o.min_m[0] - half_x;
+            moves.push(((x1 - (o.min_m[0] - half_x)) * h, 1, o.min_m[0] - half_x));
         }
         if cy < 0.5 * ys && o.max_m[1] + half_y > y0 && o.max_m[1] < 0.5 * ys {
-            y0 = o.max_m[1] + half_y;
+            moves.push(((o.max_m[1] + half_y - y0) * w, 2, o.max_m[1] + half_y));
         }
         if cy > 0.5 * ys && o.min_m[1] - half_y < y1 && o.min_m[1] > 0.5 * ys {
-            y1 = o.min_m[1] - half_y;
+            moves.push(((y1 - (o.min_m[1] - half_y)) * w, 3, o.min_m[1] - half_y));
+        }
+        if let Some(&(_, side, at)) = moves.iter().min_by(|a, b| a.0.total_cmp(&b.0)) {
+            match side {
+                0 => x0 = at,
+                1 => x1 = at,
+                2 => y0 = at,
+                _ => y1 = at,
+            }
         }
     }
     if x1 - x0 < 0.3 || y1 - y0 < 0.3 {

@@ -97,6 +97,9 @@ pub(crate) enum Phase {
     Positioning { left_s: f64 },
     /// In the cursor's move, this far into it.
     Spraying { in_move_s: f64 },
+    /// Every pass sprayed: out of the last station's lane to where the
+    /// robot can turn, for whatever comes next.
+    Leaving,
 }
 
 /// The `plaster` task's state.
