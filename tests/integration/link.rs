@@ -275,6 +275,9 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
         Command::PlasterSurface {
             surface: SurfaceName::Ceiling,
         },
+        Command::GoToRoom {
+            room: "hall".to_owned(),
+        },
         Command::Stop,
         Command::Abort,
     ];
@@ -311,8 +314,12 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     assert_eq!(count("started move_relative"), 1, "{kinds:?}");
     assert_eq!(count("started map_room"), 1, "{kinds:?}");
     // Refused, each with its reason: the door, skip, the two standoffs,
-    // the spray tool.
-    assert_eq!(refusals.len(), 5, "{refusals:?}");
+    // the spray tool, a room without a floor plan.
+    assert_eq!(refusals.len(), 6, "{refusals:?}");
+    assert!(
+        refusals.iter().any(|r| r.contains("no floor plan")),
+        "{refusals:?}"
+    );
     assert_eq!(
         refusals.iter().filter(|r| r.contains("standoff_m")).count(),
         2,
@@ -325,6 +332,52 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     assert_eq!(count("paused"), 2, "{kinds:?}");
     assert_eq!(count("resumed"), 1, "{kinds:?}");
     assert_eq!(count("aborted"), 1, "{kinds:?}");
+}
+
+/// On the office floor's plan, the operator sends the robot from the
+/// corridor into office A and on into B: each done, the robot's state
+/// naming the room it is in; a room the plan does not have is refused,
+/// naming those it has.
+#[test]
+fn an_operator_sends_the_robot_from_room_to_room() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = format!("unixsock-stream/{}", dir.path().join("z.sock").display());
+    let robot = crate::RunningRobot::start_on(
+        "robot-floor",
+        "r1",
+        LinkConfig {
+            listen: vec![endpoint.clone()],
+            ..LinkConfig::default()
+        },
+        10.0,
+    );
+    let peer = LinkConfig {
+        connect: vec![endpoint],
+        ..LinkConfig::default()
+    };
+    let mut op = Operator::connect(&peer, "ann").unwrap();
+    // Left unread while the robot drives: it must not hold the robot up.
+    let states = op.states("r1").unwrap();
+    let go = |room: &str| Command::GoToRoom {
+        room: room.to_owned(),
+    };
+    let r = op.send("r1", go("kitchen"), 10.0, None).unwrap();
+    assert!(
+        matches!(&r.ack.reply, Reply::Rejected { reason } if reason.contains("office-a")),
+        "{:?}",
+        r.ack
+    );
+    for room in ["office-a", "office-b"] {
+        let r = op
+            .send("r1", go(room), 10.0, Some(Duration::from_secs(60)))
+            .unwrap();
+        assert_eq!(r.ack.reply, Reply::Accepted);
+        assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done), "{room}");
+        std::thread::sleep(Duration::from_millis(300));
+        let last = states.drain().pop().unwrap();
+        assert_eq!(last["room"], room, "{last}");
+    }
+    robot.stop();
 }
 
 /// The operator jogs the robot and vanishes (its session closed): the

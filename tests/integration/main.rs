@@ -35,11 +35,18 @@ pub struct RunningRobot {
 }
 
 impl RunningRobot {
-    /// Starts robot `name` and gives it half a second to join the network.
+    /// Starts robot `name` (standing by in the apartment,
+    /// `missions/robot.toml`) and gives it half a second to join the
+    /// network.
     pub fn start(name: &str, link: stucco_cli::LinkConfig, speed: f64) -> Self {
+        Self::start_on("robot", name, link, speed)
+    }
+
+    /// Starts robot `name` on `missions/<mission>.toml`.
+    pub fn start_on(mission: &str, name: &str, link: stucco_cli::LinkConfig, speed: f64) -> Self {
         let job = stucco_cli::RobotJob {
             mission: std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../missions/robot.toml"),
+                .join(format!("../missions/{mission}.toml")),
             name: name.to_owned(),
             link,
             speed,

@@ -254,6 +254,12 @@ enum OpAction {
         #[arg(long, value_parser = parse_surface)]
         surface: SurfaceName,
     },
+    /// Go to a room of the floor plan, through the doors on the way.
+    GoToRoom {
+        /// The room, by its name on the plan.
+        #[arg(long)]
+        room: String,
+    },
     /// Drive through a door the robot knows.
     PassDoor {
         /// The door's index.
@@ -405,6 +411,7 @@ fn op(
         OpAction::MapRoom => Tc::MapRoom,
         OpAction::Plaster { surface } => Tc::PlasterSurface { surface },
         OpAction::PassDoor { door } => Tc::PassDoor { door },
+        OpAction::GoToRoom { room } => Tc::GoToRoom { room },
         OpAction::Move { dx, dy, dtheta } => Tc::MoveRelative {
             dx_m: dx,
             dy_m: dy,

@@ -57,6 +57,11 @@ pub struct Mission {
     /// The tasks, in order (`[[task]]`).
     #[serde(default, rename = "task")]
     pub tasks: Vec<TaskSpec>,
+    /// A file holding the building's plan (its `[[room]]` and `[[door]]`
+    /// tables), relative to the mission file: one drawing for the
+    /// missions of a building.
+    #[serde(default)]
+    pub plan: Option<PathBuf>,
     /// The building's rooms as its plan draws them (`[[room]]`), for
     /// `go_to_room` and for the robot's frame to follow it from room to
     /// room.
@@ -80,6 +85,16 @@ fn yes() -> bool {
 
 fn time_limit() -> f64 {
     1800.0
+}
+
+/// A plan's own file: the building's rooms and doors.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlanFile {
+    #[serde(default, rename = "room")]
+    rooms: Vec<PlanRoom>,
+    #[serde(default, rename = "door")]
+    doors: Vec<PlanDoor>,
 }
 
 /// What the robot knows of its start in a task mission: it stands at the
@@ -200,7 +215,31 @@ impl Mission {
     /// errors).
     pub fn parse(text: &str, path: &Path) -> Result<Mission> {
         let text = text.to_owned();
-        let mission: Mission = parse_toml(&text, path)?;
+        let mut mission: Mission = parse_toml(&text, path)?;
+        // The plan's own file, when it has one: its faults are named there.
+        let plan_file = match &mission.plan {
+            None => None,
+            Some(_) if !(mission.rooms.is_empty() && mission.doors.is_empty()) => bad!(
+                "{}:{}: plan: the plan is in its file or in [[room]] and [[door]] here, not both",
+                path.display(),
+                line_of(&text, "", "plan")
+            ),
+            Some(file) => {
+                let plan_path = path.parent().map_or_else(|| file.clone(), |d| d.join(file));
+                let plan_text = std::fs::read_to_string(&plan_path).map_err(|e| {
+                    BadInput(format!(
+                        "{}:{}: plan: cannot read {}: {e}",
+                        path.display(),
+                        line_of(&text, "", "plan"),
+                        plan_path.display()
+                    ))
+                })?;
+                let drawn: PlanFile = parse_toml(&plan_text, &plan_path)?;
+                mission.rooms = drawn.rooms;
+                mission.doors = drawn.doors;
+                Some((plan_text, plan_path))
+            }
+        };
         let kinds = usize::from(mission.door_passage.is_some())
             + usize::from(mission.corridor.is_some())
             + usize::from(mission.room_size.is_some())
@@ -241,7 +280,10 @@ impl Mission {
                 line_of(&text, "spray", field)
             );
         }
-        let plan = mission.checked_plan(&text, path)?;
+        let plan = match &plan_file {
+            Some((plan_text, plan_path)) => mission.checked_plan(plan_text, plan_path)?,
+            None => mission.checked_plan(&text, path)?,
+        };
         if let (Some(plan), Some(name)) =
             (&plan, mission.start.as_ref().and_then(|s| s.room.as_ref()))
             && plan.room(name).is_none()
@@ -311,6 +353,9 @@ impl Mission {
 
     /// The floor plan (`[[room]]`, `[[door]]`), when the mission has one.
     pub fn floor_plan(&self) -> Option<FloorPlan> {
+        if self.rooms.is_empty() && self.doors.is_empty() {
+            return None;
+        }
         FloorPlan::new(self.rooms.clone(), self.doors.clone()).ok()
     }
 

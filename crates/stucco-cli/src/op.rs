@@ -354,8 +354,12 @@ impl WatchView {
         };
         let pose = &v["pose"];
         let f = |x: &serde_json::Value| x.as_f64().unwrap_or(f64::NAN);
+        // The pose's frame is the room's, when the robot follows a plan.
+        let room = v["room"]
+            .as_str()
+            .map_or_else(String::new, |r| format!(" in {r}"));
         let mut line = format!(
-            "{:>9.1} s  state  {mode} · {task} · {}  pose {:.2} {:.2} m {:.1}°  σ {:.1} cm  drive {:.2} m/s",
+            "{:>9.1} s  state  {mode} · {task} · {}  pose{room} {:.2} {:.2} m {:.1}°  σ {:.1} cm  drive {:.2} m/s",
             secs(v),
             short(&v["behaviour"]),
             f(&pose["x"]),

@@ -37,7 +37,7 @@ use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 use stucco_core::{Ack, Reply, Stamp, Telecommand};
 use zenoh::Wait;
-use zenoh::handlers::FifoChannelHandler;
+use zenoh::handlers::{FifoChannelHandler, RingChannel, RingChannelHandler};
 use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::query::{Query, Queryable};
 use zenoh::sample::Sample;
@@ -45,7 +45,14 @@ use zenoh::sample::Sample;
 pub use zenoh::Session;
 
 /// A subscription's queue of samples.
-pub type Subscription = Subscriber<FifoChannelHandler<Sample>>;
+pub type Subscription = Subscriber<RingChannelHandler<Sample>>;
+
+/// Messages a watcher's subscription holds before it drops the oldest: a
+/// reader that falls behind loses old states, never holds up the robot (a
+/// FIFO that fills blocks the session's delivery, and with it the
+/// robot's publishing: measured, a state feed left unread for a minute
+/// slowed the robot's loop to a sixtieth of its pace).
+pub const WATCH_CAPACITY: usize = 1024;
 
 /// Runs a router: a session in router mode that the robots and operators
 /// of a site connect to; it routes until dropped.
@@ -523,17 +530,18 @@ impl OperatorClient {
     }
 
     /// Every reply `robot` publishes from now on.
-    pub fn acks(&self, robot: &str) -> Result<Subscriber<FifoChannelHandler<Sample>>, LinkError> {
-        self.session
-            .declare_subscriber(keys::acks(robot))
-            .wait()
-            .map_err(z)
+    pub fn acks(&self, robot: &str) -> Result<Subscription, LinkError> {
+        self.watch(keys::acks(robot))
     }
 
     /// A subscriber to one of `robot`'s topics (`state`, `events`,
     /// `heartbeat`).
-    pub fn watch(&self, key: String) -> Result<Subscriber<FifoChannelHandler<Sample>>, LinkError> {
-        self.session.declare_subscriber(key).wait().map_err(z)
+    pub fn watch(&self, key: String) -> Result<Subscription, LinkError> {
+        self.session
+            .declare_subscriber(key)
+            .with(RingChannel::new(WATCH_CAPACITY))
+            .wait()
+            .map_err(z)
     }
 
     /// The robots that answer within `timeout`.
