@@ -111,6 +111,45 @@ fn a_plastering_run_killed_and_resumed_sprays_nothing_twice() {
     assert_sofa_reported(&resumed);
 }
 
+/// The reference room (`missions/reference-plaster.toml`): plastered
+/// round the table in its middle within every target; the way between
+/// stations on either side of the table goes round it.
+#[test]
+fn the_reference_room_is_plastered_round_its_table_within_the_targets() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run_file("reference-plaster", dir.path(), false, None);
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    let pct = |x: Option<f64>| x.unwrap();
+    assert!(
+        pct(r.wall_coverage_pct) >= 99.5,
+        "{:?}",
+        r.wall_coverage_pct
+    );
+    assert!(
+        pct(r.ceiling_coverage_pct) >= 99.0,
+        "{:?}",
+        r.ceiling_coverage_pct
+    );
+    assert!(pct(r.overspray_pct) <= 0.5, "{:?}", r.overspray_pct);
+    assert!(pct(r.thickness_cv) <= 0.08, "{:?}", r.thickness_cv);
+    assert!(
+        pct(r.double_sprayed_pct) <= 1.0,
+        "{:?}",
+        r.double_sprayed_pct
+    );
+    let (t, bound) = (pct(r.mission_time_s), pct(r.mission_time_lower_bound_s));
+    assert!(t <= 1.25 * bound, "{t} s against a bound of {bound} s");
+    eprintln!(
+        "reference room: walls {:.2}%, ceiling {:.2}%, overspray {:.3}%, CV {:.2}%, \
+         {t:.0} s against {bound:.0} s ({:.3})",
+        pct(r.wall_coverage_pct),
+        pct(r.ceiling_coverage_pct),
+        pct(r.overspray_pct),
+        100.0 * pct(r.thickness_cv),
+        t / bound
+    );
+}
+
 /// The two-room job (`missions/two-offices.toml`): from the corridor into
 /// office A, mapped and plastered round its table and window, through
 /// the door between the offices into B, mapped and plastered round its

@@ -6,6 +6,7 @@ use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
 use crate::floor::FloorPlan;
 use crate::model::{DoorEstimate, Estimate, WallGeometry, pose_at_wall};
 use crate::plaster::{Cursor, Phase, PlasterCoverage, PlasterProgress, PlasterRun, plan_digest};
+use crate::route::{Floor, route};
 use crate::supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor};
 use crate::task::{OnTimeout, TaskSpec, WallName};
 use nalgebra::Point2;
@@ -1113,7 +1114,8 @@ impl Executive {
                 run.phase = Phase::Surveying;
             } else {
                 let k = run.cursor.station;
-                queue.extend(station_way(gains, clearance, &run, k, &pose, speed_mps));
+                let floor = floor_of(&run, &self.config.vehicle, clearance);
+                queue.extend(station_way(gains, &floor, &run, k, &pose, speed_mps));
             }
             self.emit(
                 now,
@@ -1536,7 +1538,8 @@ impl Executive {
                     },
                 });
                 run.replan(plan);
-                let way = station_way(&gains, clearance, run, 0, &est.pose, speed);
+                let floor = floor_of(run, &vehicle, clearance);
+                let way = station_way(&gains, &floor, run, 0, &est.pose, speed);
                 a.queue.extend(way);
                 self.tool = park;
                 TaskStep::Drive(DriveCommand::STOP)
@@ -1683,16 +1686,29 @@ impl Executive {
                     if run.finished() {
                         self.tool = park;
                         let last = run.plan.stations.len().saturating_sub(1);
+                        let floor = floor_of(run, &vehicle, clearance);
                         a.queue
-                            .extend(lane_exit(&gains, clearance, run, last, &est.pose, speed));
+                            .extend(lane_exit(&gains, &floor, run, last, &est.pose, speed));
                         run.phase = Phase::Leaving;
                         return TaskStep::Drive(DriveCommand::STOP);
                     }
                     if station_done {
                         let k = run.cursor.station;
+                        let floor = floor_of(run, &vehicle, clearance);
                         let mut way = Vec::new();
-                        if run.lane(k) != run.lane(k - 1) {
-                            way.extend(lane_exit(&gains, clearance, run, k - 1, &est.pose, speed));
+                        // Along the lane to the next station only when
+                        // the body passes clear; out of it otherwise.
+                        let along_clear = run.plan.stations.get(k).is_some_and(|s| {
+                            let h =
+                                nalgebra::Vector2::new(est.pose.theta.cos(), est.pose.theta.sin());
+                            floor.sweep_clear(
+                                &est.pose.position().coords,
+                                &s.base.position().coords,
+                                &h,
+                            )
+                        });
+                        if run.lane(k) != run.lane(k - 1) || !along_clear {
+                            way.extend(lane_exit(&gains, &floor, run, k - 1, &est.pose, speed));
                         }
                         let from = way
                             .last()
@@ -1701,7 +1717,7 @@ impl Executive {
                                 _ => None,
                             })
                             .unwrap_or(est.pose);
-                        way.extend(station_way(&gains, clearance, run, k, &from, speed));
+                        way.extend(station_way(&gains, &floor, run, k, &from, speed));
                         run.phase = Phase::Moving;
                         a.queue.extend(way);
                         self.tool = park;
@@ -1974,7 +1990,7 @@ fn plan_room(
 /// can turn (`clearance` from every wall), and along it to the station.
 fn station_way(
     gains: &GainSchedule,
-    clearance: f64,
+    floor: &Floor,
     run: &PlasterRun,
     k: usize,
     from: &Pose2,
@@ -1987,7 +2003,8 @@ fn station_way(
     let heading = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
     let p = from.position().coords;
     let off = line.inward.dot(&(p - line.origin)) - dist;
-    if off.abs() < 0.15 && wrap_angle(from.theta - goal.theta).abs() < 0.2 {
+    let on_lane = off.abs() < 0.15 && wrap_angle(from.theta - goal.theta).abs() < 0.2;
+    if on_lane && floor.sweep_clear(&p, &goal.position().coords, &heading) {
         let ahead = heading.dot(&(goal.position().coords - p));
         return vec![if ahead >= 0.0 {
             Behaviour::regulate(gains, goal, speed)
@@ -1995,17 +2012,25 @@ fn station_way(
             Behaviour::reverse_to(gains, goal, speed)
         }];
     }
-    let Some(entry) = lane_entry(clearance, run, k) else {
+    let Some((entry, forward)) = lane_entry(floor, run, k) else {
         return Vec::new();
     };
-    let mut way = go_to(gains, from, &entry, speed);
-    way.push(Behaviour::regulate(gains, goal, speed));
+    let mut way = route(gains, floor, from, &entry, speed);
+    way.push(if forward {
+        Behaviour::regulate(gains, goal, speed)
+    } else {
+        Behaviour::reverse_to(gains, goal, speed)
+    });
     way
 }
 
-/// Where the robot comes onto the lane of station `k`: a run-in before
-/// the station, `clearance` from every wall so it can turn there.
-fn lane_entry(clearance: f64, run: &PlasterRun, k: usize) -> Option<Pose2> {
+/// Where the robot comes onto the lane of station `k`: a place to turn,
+/// `clearance` from every wall and from what stands on the floor, from
+/// where the body runs clear along the lane to the station — a run-in
+/// before it (driving on), or failing that, beyond it (backing onto it:
+/// the second of the pair is false).
+fn lane_entry(floor: &Floor, run: &PlasterRun, k: usize) -> Option<(Pose2, bool)> {
+    let clearance = floor.clearance_m;
     let goal = run.plan.stations.get(k)?.base;
     let (line, dist) = run.lane_line(k)?;
     let heading = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
@@ -2016,20 +2041,35 @@ fn lane_entry(clearance: f64, run: &PlasterRun, k: usize) -> Option<Pose2> {
         (line.length_m - clearance).max(clearance),
     );
     let want = (at - dir * RUN_IN_M).clamp(lo, hi);
-    // The robot turns there: nothing may stand within its sweep. The
-    // nearest such place along the lane, one with a full run-in first.
+    // The robot turns there: nothing may stand within its sweep, and the
+    // way along the lane to the station must be clear.
     let off = dist.max(clearance);
-    let clear = |a: f64| turn_clear(run, &line.point(a, off), clearance);
+    let clear = |a: f64| {
+        let e = line.point(a, off);
+        turn_clear(run, &e, clearance) && floor.sweep_clear(&e, &goal.position().coords, &heading)
+    };
     let candidates = (0..200)
         .flat_map(|k| [want - dir * 0.05 * k as f64, want + dir * 0.05 * k as f64])
         .filter(|a| (lo..=hi).contains(a) && (at - a) * dir > 0.05);
-    let entry_at = candidates
+    let before = candidates
         .clone()
         .find(|&a| (at - a) * dir >= MIN_RUN_IN_M && clear(a))
-        .or_else(|| candidates.clone().find(|&a| clear(a)))
-        .unwrap_or(want);
-    let e = line.point(entry_at, off);
-    Some(Pose2::new(e.x, e.y, goal.theta))
+        .or_else(|| candidates.clone().find(|&a| clear(a)));
+    let pose = |a: f64| {
+        let e = line.point(a, off);
+        Pose2::new(e.x, e.y, goal.theta)
+    };
+    if let Some(a) = before {
+        return Some((pose(a), true));
+    }
+    let beyond = (1..200)
+        .map(|k| at + dir * 0.05 * k as f64)
+        .filter(|a| (lo..=hi).contains(a))
+        .find(|&a| clear(a));
+    Some(match beyond {
+        Some(a) => (pose(a), false),
+        None => (pose(want), true),
+    })
 }
 
 /// True when nothing the plan knows on the floor stands within `radius`
@@ -2047,28 +2087,33 @@ fn turn_clear(run: &PlasterRun, p: &nalgebra::Vector2<f64>, radius: f64) -> bool
 /// leading, as a pass along a wall ends.
 fn lane_exit(
     gains: &GainSchedule,
-    clearance: f64,
+    floor: &Floor,
     run: &PlasterRun,
     k: usize,
     from: &Pose2,
     speed: f64,
 ) -> Vec<Behaviour> {
+    let clearance = floor.clearance_m;
     let Some((line, dist)) = run.lane_line(k) else {
         return Vec::new();
     };
     let heading = nalgebra::Vector2::new(from.theta.cos(), from.theta.sin());
     let dir = line.along.dot(&heading).signum();
-    let at = line.along.dot(&(from.position().coords - line.origin));
+    let p = from.position().coords;
+    let at = line.along.dot(&(p - line.origin));
     let (lo, hi) = (clearance, line.length_m - clearance);
     let (lo, hi) = (lo.min(hi), hi.max(lo));
     let want = (at + dir * RUN_IN_M).clamp(lo, hi);
     // The robot will turn there: the nearest place along the lane where
-    // nothing stands within its sweep.
+    // nothing stands within its sweep, reached with the body clear.
     let off = dist.max(clearance);
     let out_at = (0..200)
         .flat_map(|k| [want + 0.05 * k as f64, want - 0.05 * k as f64])
         .filter(|a| (lo..=hi).contains(a))
-        .find(|a| turn_clear(run, &line.point(*a, off), clearance))
+        .find(|a| {
+            let o = line.point(*a, off);
+            turn_clear(run, &o, clearance) && floor.sweep_clear(&p, &o, &heading)
+        })
         .unwrap_or(want);
     let o = line.point(out_at, off);
     vec![Behaviour::regulate(
@@ -2076,6 +2121,16 @@ fn lane_exit(
         Pose2::new(o.x, o.y, from.theta),
         speed,
     )]
+}
+
+/// The floor of the plan's room as the way between stations sees it.
+fn floor_of<'a>(run: &'a PlasterRun, vehicle: &VehicleSpec, clearance: f64) -> Floor<'a> {
+    Floor::new(
+        run.plan.room.size_m,
+        &run.plan.room.obstacles,
+        vehicle,
+        clearance,
+    )
 }
 
 /// A look at every wall before the plan is made again on what the camera

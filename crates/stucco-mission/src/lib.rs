@@ -34,6 +34,7 @@ mod executive;
 mod floor;
 mod model;
 mod plaster;
+mod route;
 mod supervisor;
 mod task;
 
