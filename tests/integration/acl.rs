@@ -78,6 +78,7 @@ impl Site<'_> {
                 dx_m: 0.5,
                 dy_m: 0.0,
                 dtheta_deg: 0.0,
+                landmark: None,
             },
             Command::Stop,
         ] {

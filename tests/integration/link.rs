@@ -31,6 +31,7 @@ fn forward_done(op: &mut Operator, robot: &str, dx_m: f64) {
         dx_m,
         dy_m: 0.0,
         dtheta_deg: 0.0,
+        landmark: None,
     };
     let r = op
         .send(robot, command, 10.0, Some(Duration::from_secs(30)))
@@ -56,6 +57,7 @@ fn an_operator_commands_a_robot_over_zenoh() {
                 dx_m: 0.5,
                 dy_m: 0.0,
                 dtheta_deg: 0.0,
+                landmark: None,
             },
             10.0,
             Some(Duration::from_secs(30)),
@@ -88,6 +90,7 @@ fn an_operator_commands_a_robot_over_zenoh() {
                 dx_m: 1.0,
                 dy_m: 0.0,
                 dtheta_deg: 0.0,
+                landmark: None,
             },
             10.0,
             None,
@@ -258,6 +261,7 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
             dx_m: 0.3,
             dy_m: 0.0,
             dtheta_deg: 0.0,
+            landmark: None,
         },
         Command::FollowWall {
             wall: WallName::South,

@@ -277,6 +277,16 @@ enum OpAction {
         /// Turn, degrees.
         #[arg(long, default_value_t = 0.0)]
         dtheta: f64,
+        /// Move to (dx, dy, dθ) in this wall's frame (facing it from
+        /// inside, origin at its middle, y to the left) instead of the
+        /// robot's.
+        #[arg(long, value_parser = parse_wall, conflicts_with = "door")]
+        wall: Option<WallName>,
+        /// Move to (dx, dy, dθ) in this door's frame (facing it from
+        /// inside, origin at its middle): `--door 0 --dx -1` stands a
+        /// metre before it.
+        #[arg(long)]
+        door: Option<usize>,
     },
     /// Follow a wall at a standoff.
     FollowWall {
@@ -412,10 +422,19 @@ fn op(
         OpAction::Plaster { surface } => Tc::PlasterSurface { surface },
         OpAction::PassDoor { door } => Tc::PassDoor { door },
         OpAction::GoToRoom { room } => Tc::GoToRoom { room },
-        OpAction::Move { dx, dy, dtheta } => Tc::MoveRelative {
+        OpAction::Move {
+            dx,
+            dy,
+            dtheta,
+            wall,
+            door,
+        } => Tc::MoveRelative {
             dx_m: dx,
             dy_m: dy,
             dtheta_deg: dtheta,
+            landmark: wall
+                .map(stucco_core::Landmark::Wall)
+                .or(door.map(stucco_core::Landmark::Door)),
         },
         OpAction::FollowWall {
             wall,

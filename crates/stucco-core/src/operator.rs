@@ -105,7 +105,8 @@ pub enum Command {
         /// Where it ends, m.
         to_m: f64,
     },
-    /// Move by `(dx, dy, dθ)` in the robot's frame.
+    /// Move by `(dx, dy, dθ)` in the robot's frame, or to `(dx, dy, dθ)`
+    /// in a landmark's frame (see [`Landmark`]).
     MoveRelative {
         /// Forward, m.
         dx_m: f64,
@@ -113,6 +114,9 @@ pub enum Command {
         dy_m: f64,
         /// Turn, degrees.
         dtheta_deg: f64,
+        /// The thing the move is relative to (the robot, without it).
+        #[serde(default)]
+        landmark: Option<Landmark>,
     },
     /// Stop parallel to a wall at a standoff.
     AlignToWall {
@@ -155,6 +159,20 @@ pub enum Command {
     },
     /// A harmless query: replied to at once.
     Status,
+}
+
+/// Something the robot perceives that a move may be relative to
+/// (`{"wall": "south"}`, `{"door": 0}`). Its frame faces it from inside
+/// the room: the origin at its middle (a door's middle, the middle of a
+/// wall) on the wall's line, x toward it (out of the room), y to the left.
+/// `dx = -1.0` with a door stands the robot a metre before it, facing it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Landmark {
+    /// A wall of the room.
+    Wall(WallName),
+    /// A door the robot knows, by its index.
+    Door(usize),
 }
 
 /// A surface of a room: a wall or the ceiling (`{"wall": "south"}`,

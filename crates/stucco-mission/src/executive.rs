@@ -1155,8 +1155,13 @@ impl Executive {
                 dy_m,
                 dtheta_deg,
                 speed_mps,
+                landmark,
             } => {
-                let goal = pose * Pose2::new(*dx_m, *dy_m, dtheta_deg.to_radians());
+                let frame = match landmark {
+                    None => pose,
+                    Some(l) => landmark_frame(l, est)?,
+                };
+                let goal = frame * Pose2::new(*dx_m, *dy_m, dtheta_deg.to_radians());
                 queue.extend(go_to(gains, &pose, &goal, *speed_mps));
             }
             TaskSpec::AlignToWall {
@@ -2331,4 +2336,24 @@ fn plan_door_pass(
         approach_beyond_m,
         speed_mps,
     ))
+}
+
+/// The frame of `landmark` in the room as `est` knows it: facing it from
+/// inside, its origin at its middle on the wall's line, x out of the room.
+fn landmark_frame(landmark: &crate::task::Landmark, est: &Estimate) -> Result<Pose2, String> {
+    let (wall, along) = match *landmark {
+        crate::task::Landmark::Wall(w) => (w, WallGeometry::of(w, est.room_m).length_m / 2.0),
+        crate::task::Landmark::Door(i) => {
+            let d = est.doors.get(i).ok_or_else(|| {
+                format!(
+                    "move_relative: door {i} is not known ({} doors found)",
+                    est.doors.len()
+                )
+            })?;
+            (d.wall, d.position_m)
+        }
+    };
+    let g = WallGeometry::of(wall, est.room_m);
+    let o = g.point(along, 0.0);
+    Ok(Pose2::new(o.x, o.y, (-g.inward.y).atan2(-g.inward.x)))
 }

@@ -2,7 +2,7 @@
 //! (`[[task]]` tables with `task = "follow_wall"` and the task's fields).
 
 use serde::{Deserialize, Serialize};
-pub use stucco_core::{Side, WallName};
+pub use stucco_core::{Landmark, Side, WallName};
 
 /// What a [`TaskSpec::WaitForOperator`] does when nobody answers in time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -107,7 +107,9 @@ pub enum TaskSpec {
         #[serde(default = "localize_timeout")]
         timeout_s: f64,
     },
-    /// Moves by `(dx, dy, dθ)` in the robot's frame at the task's start.
+    /// Moves by `(dx, dy, dθ)` in the robot's frame at the task's start,
+    /// or to `(dx, dy, dθ)` in the frame of `landmark` (a wall or a door,
+    /// faced from inside the room: see [`Landmark`]).
     MoveRelative {
         /// Forward, m.
         dx_m: f64,
@@ -117,6 +119,9 @@ pub enum TaskSpec {
         /// Turn, degrees counter-clockwise.
         #[serde(default)]
         dtheta_deg: f64,
+        /// The thing the move is relative to (the robot, without it).
+        #[serde(default)]
+        landmark: Option<Landmark>,
         /// Speed, m/s.
         #[serde(default = "drive_speed")]
         speed_mps: f64,
@@ -269,10 +274,12 @@ impl TaskSpec {
                 dx_m,
                 dy_m,
                 dtheta_deg,
+                landmark,
             } => TaskSpec::MoveRelative {
                 dx_m: *dx_m,
                 dy_m: *dy_m,
                 dtheta_deg: *dtheta_deg,
+                landmark: *landmark,
                 speed_mps: drive_speed(),
             },
             C::AlignToWall {
@@ -391,6 +398,7 @@ impl TaskSpec {
                 dy_m,
                 dtheta_deg,
                 speed_mps,
+                ..
             } => {
                 if !(finite(*dx_m) && finite(*dy_m) && finite(*dtheta_deg)) {
                     return Some(("dx_m", "the motion must be finite"));
@@ -530,6 +538,7 @@ mod tests {
             dx_m: 1.0,
             dy_m: 0.0,
             dtheta_deg: 0.0,
+            landmark: None,
             speed_mps: 2.0,
         };
         assert_eq!(t.invalid().map(|(k, _)| k), Some("speed_mps"));

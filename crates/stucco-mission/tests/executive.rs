@@ -129,6 +129,7 @@ fn forward(dx_m: f64) -> TaskSpec {
         dx_m,
         dy_m: 0.0,
         dtheta_deg: 0.0,
+        landmark: None,
         speed_mps: 0.3,
     }
 }
@@ -198,6 +199,7 @@ fn move_relative_ends_at_the_goal_turning_on_the_spot() {
             dx_m: 1.0,
             dy_m: 0.5,
             dtheta_deg: 90.0,
+            landmark: None,
             speed_mps: 0.3,
         }],
         true,
@@ -605,6 +607,7 @@ fn a_task_from_the_operator_is_accepted_then_done() {
             dx_m: 0.8,
             dy_m: 0.0,
             dtheta_deg: 0.0,
+            landmark: None,
         },
     );
     let first = tick_with(&mut exec, &mut robot, &[mv]);
@@ -702,6 +705,7 @@ fn retries_are_answered_but_carried_out_once_and_stale_or_impossible_commands_re
             dx_m: 0.3,
             dy_m: 0.0,
             dtheta_deg: 0.0,
+            landmark: None,
         },
     );
     let mut started = 0;
@@ -856,6 +860,7 @@ fn over_a_lossy_link_every_command_is_carried_out_once_or_refused() {
                     dx_m: 0.4,
                     dy_m: 0.0,
                     dtheta_deg: 0.0,
+                    landmark: None,
                 },
             )
         })
@@ -1281,4 +1286,54 @@ fn go_to_room_from_the_operator_names_what_is_wrong() {
     }
     assert_eq!(done, Some(Reply::Done));
     assert_eq!(robot.room, Some(1));
+}
+
+/// A move relative to a landmark ends where the landmark's frame says:
+/// a metre before a door facing it, or before the middle of a wall and
+/// half a metre to its left; a door the robot does not know fails the task
+/// saying so.
+#[test]
+fn a_move_relative_to_a_door_or_a_wall_ends_in_its_frame() {
+    let to = |landmark, dx_m, dy_m| TaskSpec::MoveRelative {
+        dx_m,
+        dy_m,
+        dtheta_deg: 0.0,
+        speed_mps: 0.3,
+        landmark: Some(landmark),
+    };
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    robot.doors = vec![DoorEstimate {
+        wall: WallName::South,
+        position_m: 2.5,
+        width_m: Some(0.9),
+        sigma_m: 0.01,
+        plan_door: None,
+    }];
+    let mut exec = executive(vec![to(Landmark::Door(0), -1.0, 0.0)], true);
+    run(&mut exec, &mut robot, 60.0, |_, _| Vec::new());
+    assert_eq!(exec.mode(), &MissionMode::Done);
+    let p = robot.pose;
+    assert!(
+        (p.x - 2.5).abs() < 0.02 && (p.y - 1.0).abs() < 0.02,
+        "{p:?}"
+    );
+    assert!(
+        wrap_angle(p.theta + std::f64::consts::FRAC_PI_2).abs() < 0.02,
+        "{p:?}"
+    );
+    // Facing the east wall (x = 5) from 1.2 m, half a metre to its left.
+    let mut exec = executive(vec![to(Landmark::Wall(WallName::East), -1.2, 0.5)], true);
+    run(&mut exec, &mut robot, 60.0, |_, _| Vec::new());
+    let p = robot.pose;
+    assert!(
+        (p.x - 3.8).abs() < 0.02 && (p.y - 2.0).abs() < 0.02,
+        "{p:?}"
+    );
+    assert!(wrap_angle(p.theta).abs() < 0.02, "{p:?}");
+    let mut exec = executive(vec![to(Landmark::Door(3), -1.0, 0.0)], true);
+    run(&mut exec, &mut robot, 5.0, |_, _| Vec::new());
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?}", exec.mode());
+    };
+    assert!(reason.contains("door 3 is not known"), "{reason}");
 }
