@@ -278,6 +278,7 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
         Command::MapRoom,
         Command::PlasterSurface {
             surface: SurfaceName::Ceiling,
+            region: None,
         },
         Command::GoToRoom {
             room: "hall".to_owned(),

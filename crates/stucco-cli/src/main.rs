@@ -253,6 +253,10 @@ enum OpAction {
         /// The surface: west, south, east, north (walls) or ceiling.
         #[arg(long, value_parser = parse_surface)]
         surface: SurfaceName,
+        /// Only a part of the wall: FROM,TO along it and BOTTOM,TOP above
+        /// the floor, m (e.g. `--region 1.0,2.5,0.0,1.2`).
+        #[arg(long, value_parser = parse_region)]
+        region: Option<stucco_core::Region>,
     },
     /// Go to a room of the floor plan, through the doors on the way.
     GoToRoom {
@@ -355,6 +359,24 @@ fn parse_surface(s: &str) -> Result<SurfaceName, String> {
     }
 }
 
+fn parse_region(s: &str) -> Result<stucco_core::Region, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{s:?}: {e}"))?;
+    match v[..] {
+        [a0, a1, z0, z1] => Ok(stucco_core::Region {
+            along_m: [a0, a1],
+            height_m: [z0, z1],
+        }),
+        _ => Err(format!(
+            "{s:?}: four numbers FROM,TO,BOTTOM,TOP (m), not {}",
+            v.len()
+        )),
+    }
+}
+
 fn parse_wall(s: &str) -> Result<WallName, String> {
     serde_json::from_value(serde_json::Value::String(s.to_owned()))
         .map_err(|_| format!("{s}: one of west, south, east, north"))
@@ -419,7 +441,7 @@ fn op(
         OpAction::Skip => Tc::Skip,
         OpAction::Continue => Tc::Continue,
         OpAction::MapRoom => Tc::MapRoom,
-        OpAction::Plaster { surface } => Tc::PlasterSurface { surface },
+        OpAction::Plaster { surface, region } => Tc::PlasterSurface { surface, region },
         OpAction::PassDoor { door } => Tc::PassDoor { door },
         OpAction::GoToRoom { room } => Tc::GoToRoom { room },
         OpAction::Move {

@@ -38,7 +38,9 @@ mod text;
 mod vehicle;
 
 pub use laser::{BeamWidth, LaserSpec};
-pub use operator::{Ack, Command, Landmark, Reply, Side, SurfaceName, Telecommand, WallName};
+pub use operator::{
+    Ack, Command, Landmark, Region, Reply, Side, SurfaceName, Telecommand, WallName,
+};
 pub use platform::{DriveCommand, EncoderSample, Platform, RangeProfile, Readings};
 pub use pose::{Pose2, Twist2, wrap_angle};
 pub use scan::{Beam, Scan};

@@ -156,6 +156,9 @@ pub enum Command {
     PlasterSurface {
         /// The surface, as `map` and `coverage` name it.
         surface: SurfaceName,
+        /// Only this part of it (a wall's), when given.
+        #[serde(default)]
+        region: Option<Region>,
     },
     /// A harmless query: replied to at once.
     Status,
@@ -173,6 +176,19 @@ pub enum Landmark {
     Wall(WallName),
     /// A door the robot knows, by its index.
     Door(usize),
+}
+
+/// A part of a wall: the rectangle between two positions along it and
+/// two heights above the floor (`{"along_m": [1.0, 2.5], "height_m": [0.0,
+/// 1.2]}`). Plastered, it is coated inside and left bare outside, less the
+/// tool's margin at its edges as at a window's.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Region {
+    /// From and to along the wall's axis, m.
+    pub along_m: [f64; 2],
+    /// From and to above the floor, m.
+    pub height_m: [f64; 2],
 }
 
 /// A surface of a room: a wall or the ceiling (`{"wall": "south"}`,
@@ -236,13 +252,15 @@ mod tests {
         assert_eq!(
             read(r#"{"wall": "south"}"#).unwrap(),
             Command::PlasterSurface {
-                surface: SurfaceName::Wall(WallName::South)
+                surface: SurfaceName::Wall(WallName::South),
+                region: None,
             }
         );
         assert_eq!(
             read(r#""ceiling""#).unwrap(),
             Command::PlasterSurface {
-                surface: SurfaceName::Ceiling
+                surface: SurfaceName::Ceiling,
+                region: None,
             }
         );
         for (bad, named, expected) in [

@@ -1094,6 +1094,7 @@ impl Executive {
             speed_mps,
             survey,
             survey_speed_mps,
+            region,
             ..
         } = self.tasks[index].clone()
         {
@@ -1101,7 +1102,7 @@ impl Executive {
                 .resume_plaster
                 .as_ref()
                 .is_some_and(|(p, _)| p.task == index);
-            let mut run = self.plaster_run(index, &walls, ceiling, est)?;
+            let mut run = self.plaster_run(index, &walls, ceiling, region.as_ref(), est)?;
             let gains = &self.config.gains;
             if survey && !resumed {
                 queue.extend(survey_way(
@@ -1455,6 +1456,7 @@ impl Executive {
         index: usize,
         walls: &[WallName],
         ceiling: bool,
+        region: Option<&crate::task::Region>,
         est: &Estimate,
     ) -> Result<PlasterRun, String> {
         if let Some((p, plan)) = self.resume_plaster.take()
@@ -1482,8 +1484,7 @@ impl Executive {
         let plan = plan_room(
             self.config.spray.as_ref(),
             &self.config.vehicle,
-            walls,
-            ceiling,
+            (walls, ceiling, region),
             est,
         )?;
         Ok(PlasterRun::new(plan, Cursor::default()))
@@ -1497,7 +1498,7 @@ impl Executive {
         est: &Estimate,
         speed: f64,
         settle: f64,
-        (walls, ceiling): (&[WallName], bool),
+        (walls, ceiling, region): (&[WallName], bool, Option<&crate::task::Region>),
     ) -> TaskStep {
         let vehicle = self.config.vehicle.clone();
         let spray_tool = self.config.spray.clone();
@@ -1527,10 +1528,11 @@ impl Executive {
                     return TaskStep::Drive(cmd);
                 }
                 // Every wall seen from its standoff: plan on what was found.
-                let plan = match plan_room(spray_tool.as_ref(), &vehicle, walls, ceiling, est) {
-                    Ok(p) => p,
-                    Err(e) => return TaskStep::Failed(e),
-                };
+                let plan =
+                    match plan_room(spray_tool.as_ref(), &vehicle, (walls, ceiling, region), est) {
+                        Ok(p) => p,
+                        Err(e) => return TaskStep::Failed(e),
+                    };
                 let Some(run) = a.plaster.as_mut() else {
                     return TaskStep::Failed("plaster: no plan".to_owned());
                 };
@@ -1759,12 +1761,13 @@ impl Executive {
             settle_s,
             walls,
             ceiling,
+            region,
             ..
         } = spec
         {
             let (speed, settle) = (*speed_mps, *settle_s);
-            let (walls, ceiling) = (walls.clone(), *ceiling);
-            return self.step_plaster(now, est, speed, settle, (&walls, ceiling));
+            let (walls, ceiling, region) = (walls.clone(), *ceiling, *region);
+            return self.step_plaster(now, est, speed, settle, (&walls, ceiling, region.as_ref()));
         }
         if a.doorway.as_ref().is_some_and(|w| w.entering.is_some()) {
             if let Some(step) = self.step_doorway(now, est) {
@@ -1924,8 +1927,7 @@ impl Executive {
 fn plan_room(
     tool: Option<&SprayTool>,
     vehicle: &VehicleSpec,
-    walls: &[WallName],
-    ceiling: bool,
+    (walls, ceiling, region): (&[WallName], bool, Option<&crate::task::Region>),
     est: &Estimate,
 ) -> Result<Plan, String> {
     let Some(tool) = tool else {
@@ -1970,6 +1972,29 @@ fn plan_room(
                 sill_head_m: [0.0, tool.door_head_m],
             }),
         }
+    }
+    // A region of one wall: the rest of that wall is kept out of the plan
+    // as openings are (its edges get the tool's margin).
+    if let (Some(r), [wall]) = (region, walls) {
+        let length = WallGeometry::of(*wall, est.room_m).length_m;
+        let (a, z, h) = (r.along_m, r.height_m, est.height_m);
+        let keep_out = [
+            ([0.0, a[0]], [0.0, h]),
+            ([a[1], length], [0.0, h]),
+            ([a[0], a[1]], [0.0, z[0]]),
+            ([a[0], a[1]], [z[1], h]),
+        ];
+        openings.extend(
+            keep_out
+                .into_iter()
+                .filter(|(along, z)| along[1] - along[0] > 1e-6 && z[1] - z[0] > 1e-6)
+                .map(|(along_m, sill_head_m)| WallOpening {
+                    wall: *wall,
+                    kind: OpeningKind::Window,
+                    along_m,
+                    sill_head_m,
+                }),
+        );
     }
     let room = RoomModel {
         size_m: est.room_m,

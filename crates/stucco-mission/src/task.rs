@@ -2,7 +2,7 @@
 //! (`[[task]]` tables with `task = "follow_wall"` and the task's fields).
 
 use serde::{Deserialize, Serialize};
-pub use stucco_core::{Landmark, Side, WallName};
+pub use stucco_core::{Landmark, Region, Side, WallName};
 
 /// What a [`TaskSpec::WaitForOperator`] does when nobody answers in time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -217,6 +217,10 @@ pub enum TaskSpec {
         /// apart over a twentieth of a second).
         #[serde(default = "survey_loop_speed")]
         survey_speed_mps: f64,
+        /// Only this part of the one wall listed (`walls = ["south"]`,
+        /// `ceiling = false`).
+        #[serde(default)]
+        region: Option<Region>,
     },
     /// Stops and waits for the operator's `continue`.
     WaitForOperator {
@@ -294,7 +298,7 @@ impl TaskSpec {
                 side: *side,
                 speed_mps: drive_speed(),
             },
-            C::PlasterSurface { surface } => TaskSpec::Plaster {
+            C::PlasterSurface { surface, region } => TaskSpec::Plaster {
                 walls: match surface {
                     stucco_core::SurfaceName::Wall(w) => vec![*w],
                     stucco_core::SurfaceName::Ceiling => Vec::new(),
@@ -304,6 +308,7 @@ impl TaskSpec {
                 settle_s: settle(),
                 survey: true,
                 survey_speed_mps: survey_loop_speed(),
+                region: *region,
             },
             _ => return None,
         })
@@ -378,10 +383,26 @@ impl TaskSpec {
                 speed_mps,
                 settle_s,
                 survey_speed_mps,
+                region,
                 ..
             } => {
                 if walls.is_empty() && !ceiling {
                     return Some(("walls", "nothing to plaster: no walls and no ceiling"));
+                }
+                if let Some(r) = region {
+                    if walls.len() != 1 || *ceiling {
+                        return Some((
+                            "region",
+                            "a region is part of one wall: walls = [that wall], ceiling = false",
+                        ));
+                    }
+                    let span = |v: &[f64; 2]| v[0].is_finite() && v[1].is_finite() && v[1] > v[0];
+                    if !span(&r.along_m) || !span(&r.height_m) || r.height_m[0] < 0.0 {
+                        return Some((
+                            "region",
+                            "along_m and height_m each from a lower to a higher value, heights not below the floor",
+                        ));
+                    }
                 }
                 if !speed(*survey_speed_mps) {
                     return Some(("survey_speed_mps", SPEED));

@@ -636,6 +636,7 @@ fn a_task_from_the_operator_is_accepted_then_done() {
 fn the_operator_has_one_surface_plastered() {
     let south = Command::PlasterSurface {
         surface: SurfaceName::Wall(WallName::South),
+        region: None,
     };
     let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
     let mut bare = standing_by();
@@ -993,6 +994,7 @@ fn plaster(survey: bool) -> TaskSpec {
         settle_s: 0.5,
         survey,
         survey_speed_mps: 0.3,
+        region: None,
     }
 }
 
@@ -1336,4 +1338,73 @@ fn a_move_relative_to_a_door_or_a_wall_ends_in_its_frame() {
         panic!("{:?}", exec.mode());
     };
     assert!(reason.contains("door 3 is not known"), "{reason}");
+}
+
+/// `plaster_surface` with a region: the plan sprays that part of the wall
+/// only (every stroke inside it), the rest of the wall kept out as an
+/// opening is; a region of the ceiling is refused naming the field.
+#[test]
+fn the_operator_has_a_region_of_a_wall_plastered() {
+    let region = Region {
+        along_m: [1.0, 3.0],
+        height_m: [0.0, 1.5],
+    };
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let mut exec = Executive::new(
+        ExecutiveConfig {
+            spray: Some(stucco_plan::SprayTool::default()),
+            ..config(false)
+        },
+        vec![TaskSpec::WaitForOperator {
+            prompt: "standing by".to_owned(),
+            timeout_s: None,
+            on_timeout: OnTimeout::Fail,
+        }],
+    );
+    tick_with(&mut exec, &mut robot, &[]);
+    let ceiling = Command::PlasterSurface {
+        surface: SurfaceName::Ceiling,
+        region: Some(region),
+    };
+    let c = command("c", robot.now, ceiling);
+    let out = tick_with(&mut exec, &mut robot, &[c]);
+    assert!(
+        matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains("region")),
+        "{:?}",
+        out.acks
+    );
+    let south = Command::PlasterSurface {
+        surface: SurfaceName::Wall(WallName::South),
+        region: Some(region),
+    };
+    let r = command("r", robot.now, south);
+    let out = tick_with(&mut exec, &mut robot, &[r]);
+    assert_eq!(out.acks[0].reply, Reply::Accepted);
+    let mut plan = None;
+    for _ in 0..(600.0 / DT) as usize {
+        let out = tick_with(&mut exec, &mut robot, &[]);
+        if out
+            .events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::PlanMade { .. }))
+        {
+            plan = exec.plaster_plan().cloned();
+            break;
+        }
+    }
+    let plan = plan.expect("a plan");
+    let mut strokes = 0;
+    for (_, pass) in plan.passes() {
+        assert_eq!(pass.surface, stucco_plan::SurfaceId::Wall(WallName::South));
+        for m in pass.moves.iter().filter(|m| m.spray) {
+            strokes += 1;
+            for p in [m.from_m, m.to_m] {
+                assert!(
+                    (1.0..=3.0).contains(&p[0]) && (0.0..=1.5).contains(&p[1]),
+                    "a stroke at {p:?}, outside the region"
+                );
+            }
+        }
+    }
+    assert!(strokes >= 5, "{strokes} strokes");
 }
