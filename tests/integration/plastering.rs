@@ -32,8 +32,17 @@ fn run_file(name: &str, out: &Path, resume: bool, stop_after_s: Option<f64>) -> 
     s.runs.into_iter().next().unwrap()
 }
 
-/// The scores of ACCEPTANCE.md's plastering table.
+/// The scores of ACCEPTANCE.md's plastering table, windows with them.
 fn assert_targets(r: &MissionReport) {
+    assert_coat_targets(r);
+    assert_eq!(r.windows_found, r.windows_total);
+    assert!(r.windows_total >= 1);
+    let edge = r.window_edge_err_max_m.unwrap();
+    assert!(edge <= 0.02, "window edges {edge}");
+}
+
+/// The coat's scores of ACCEPTANCE.md's plastering table.
+fn assert_coat_targets(r: &MissionReport) {
     let pct = |x: Option<f64>| x.unwrap();
     assert!(
         pct(r.wall_coverage_pct) >= 99.5,
@@ -56,10 +65,6 @@ fn assert_targets(r: &MissionReport) {
         "twice {:?}",
         r.double_sprayed_pct
     );
-    assert_eq!(r.windows_found, r.windows_total);
-    assert!(r.windows_total >= 1);
-    let edge = r.window_edge_err_max_m.unwrap();
-    assert!(edge <= 0.02, "window edges {edge}");
 }
 
 /// What the sofa hides is reported, never silently dropped.
@@ -119,24 +124,8 @@ fn the_reference_room_is_plastered_round_its_table_within_the_targets() {
     let dir = tempfile::tempdir().unwrap();
     let r = run_file("reference-plaster", dir.path(), false, None);
     assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    assert_coat_targets(&r);
     let pct = |x: Option<f64>| x.unwrap();
-    assert!(
-        pct(r.wall_coverage_pct) >= 99.5,
-        "{:?}",
-        r.wall_coverage_pct
-    );
-    assert!(
-        pct(r.ceiling_coverage_pct) >= 99.0,
-        "{:?}",
-        r.ceiling_coverage_pct
-    );
-    assert!(pct(r.overspray_pct) <= 0.5, "{:?}", r.overspray_pct);
-    assert!(pct(r.thickness_cv) <= 0.08, "{:?}", r.thickness_cv);
-    assert!(
-        pct(r.double_sprayed_pct) <= 1.0,
-        "{:?}",
-        r.double_sprayed_pct
-    );
     let (t, bound) = (pct(r.mission_time_s), pct(r.mission_time_lower_bound_s));
     assert!(t <= 1.25 * bound, "{t} s against a bound of {bound} s");
     eprintln!(

@@ -13,7 +13,7 @@ use stucco_plan::{
     OpeningKind as PlanOpening, Plan, RoomModel, RoomScore, SprayTool, SurfaceId, SurfaceScore,
     WallLine, WallOpening, score,
 };
-use stucco_sim::{Coat, Layout, OpeningKind, Simulator, SprayerSpec, SurfaceKind};
+use stucco_sim::{Coat, Layout, OpeningKind, Simulator, SprayerSpec, SurfaceKind, TrueOpening};
 
 /// Cells of the simulator's thickness grids, m (the issue asks ≤ 2 cm).
 pub const COAT_CELL_M: f64 = 0.02;
@@ -30,15 +30,13 @@ pub fn sprayer_of(tool: &SprayTool) -> SprayerSpec {
     }
 }
 
-/// The robot's room as it truly is, in the room frame: what the plaster
-/// is scored on.
-pub(crate) fn true_room(layout: &Layout, frame: &RoomFrame) -> RoomModel {
-    let height_m = layout
-        .rooms
-        .iter()
-        .find(|r| r.name == frame.name)
-        .map_or(2.6, |r| r.height_m);
-    let openings = layout
+/// The true openings of the room of `frame`, each with the wall it is in
+/// and its edges along that wall (room frame).
+pub(crate) fn room_openings<'a>(
+    layout: &'a Layout,
+    frame: &'a RoomFrame,
+) -> impl Iterator<Item = (&'a TrueOpening, WallName, [f64; 2])> + 'a {
+    layout
         .openings
         .iter()
         .filter(|o| o.room == frame.name)
@@ -56,17 +54,29 @@ pub(crate) fn true_room(layout: &Layout, frame: &RoomFrame) -> RoomModel {
                         g.along.dot(&(e[0] - g.origin)),
                         g.along.dot(&(e[1] - g.origin)),
                     );
-                    WallOpening {
-                        wall: w,
-                        kind: match o.kind {
-                            OpeningKind::OpenDoor | OpeningKind::ClosedDoor => PlanOpening::Door,
-                            OpeningKind::Window | OpeningKind::GlazedWindow => PlanOpening::Window,
-                        },
-                        along_m: [a.min(b), a.max(b)],
-                        sill_head_m: o.z,
-                    }
+                    (o, w, [a.min(b), a.max(b)])
                 })
             })
+        })
+}
+
+/// The robot's room as it truly is, in the room frame: what the plaster
+/// is scored on.
+pub(crate) fn true_room(layout: &Layout, frame: &RoomFrame) -> RoomModel {
+    let height_m = layout
+        .rooms
+        .iter()
+        .find(|r| r.name == frame.name)
+        .map_or(2.6, |r| r.height_m);
+    let openings = room_openings(layout, frame)
+        .map(|(o, wall, along_m)| WallOpening {
+            wall,
+            kind: match o.kind {
+                OpeningKind::OpenDoor | OpeningKind::ClosedDoor => PlanOpening::Door,
+                OpeningKind::Window | OpeningKind::GlazedWindow => PlanOpening::Window,
+            },
+            along_m,
+            sill_head_m: o.z,
         })
         .collect();
     RoomModel {

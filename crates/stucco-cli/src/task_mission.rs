@@ -111,6 +111,21 @@ const DOOR_SILL_M: f64 = 0.1;
 const PLAN_FILE: &str = "plan.json";
 /// The world's plaster when the run stopped (kept for a resumed run).
 const WORLD_FILE: &str = "world.json";
+/// Every room's plan a run has plastered on (beside the checkpoint): a
+/// resumed run scores the whole job, rooms done before the stop too.
+const PLASTERED_FILE: &str = "plastered.json";
+
+/// One `plaster` task's plan as kept in [`PLASTERED_FILE`].
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlasteredRoom {
+    task: usize,
+    /// The world's name of the room.
+    room: String,
+    plan: stucco_plan::Plan,
+    /// Where the robot stood when the plan was first made.
+    start: Pose2,
+}
 
 /// The report of one run (`DIR/report.json`).
 #[derive(Clone, Debug, Serialize)]
@@ -663,6 +678,21 @@ fn run_once(
     // robot stood when it was first made.
     let mut plans: std::collections::BTreeMap<usize, (RoomFrame, stucco_plan::Plan, Pose2)> =
         std::collections::BTreeMap::new();
+    if let (Some(_), Some(dir)) = (resume, out)
+        && dir.join(PLASTERED_FILE).exists()
+    {
+        let path = dir.join(PLASTERED_FILE);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+        let kept: Vec<PlasteredRoom> = serde_json::from_str(&text)
+            .map_err(|e| BadInput(format!("{}: not the rooms plastered: {e}", path.display())))?;
+        for r in kept {
+            plans.insert(
+                r.task,
+                (RoomFrame::named(&layout, &r.room)?, r.plan, r.start),
+            );
+        }
+    }
     loop {
         let now = nav.now();
         let est = nav.mission_estimate();
@@ -719,6 +749,21 @@ fn run_once(
                 .get(&task)
                 .map_or(nav.mission_estimate().pose, |p| p.2);
             plans.insert(task, (frame.clone(), plan.clone(), start));
+            if let Some(dir) = out {
+                let kept: Vec<PlasteredRoom> = plans
+                    .iter()
+                    .map(|(&task, (f, plan, start))| PlasteredRoom {
+                        task,
+                        room: f.name.clone(),
+                        plan: plan.clone(),
+                        start: *start,
+                    })
+                    .collect();
+                write_atomic(
+                    &dir.join(PLASTERED_FILE),
+                    serde_json::to_string(&kept)?.as_bytes(),
+                )?;
+            }
         }
         if let Some(door) = out_.enter_room {
             // The executive checks on its next tick that the frame moved.
@@ -853,7 +898,11 @@ fn run_once(
             plans.values().map(|(f, p, _)| (f, p)).collect();
         let (score, each) = crate::plastering::score_run(nav.sim(), &layout, &rooms);
         let top = stucco_sim::SimConfig::default().vehicle.max_speed_mps;
-        let seconds = plans.keys().map(|&t| task_seconds[t]).sum::<Option<f64>>();
+        // This run's plastering time (a resumed run's: its own part).
+        let seconds = plans
+            .keys()
+            .filter_map(|&t| task_seconds[t])
+            .reduce(|a, b| a + b);
         let bound: f64 = plans
             .values()
             .map(|(_, plan, start)| crate::plastering::time_lower_bound(plan, start, top))
@@ -1161,29 +1210,11 @@ fn score_windows(
     found: Vec<(WallName, stucco_nav::Window)>,
 ) -> (Vec<WindowReport>, usize, usize) {
     // Wall, along-range, z.
-    let truth: Vec<(WallName, [f64; 2], [f64; 2])> = layout
-        .openings
-        .iter()
-        .filter(|o| {
-            o.room == frame.name
-                && matches!(o.kind, OpeningKind::Window | OpeningKind::GlazedWindow)
-        })
-        .filter_map(|o| {
-            let e: Vec<nalgebra::Vector2<f64>> = o
-                .edges
-                .iter()
-                .map(|p| nalgebra::Vector2::new(p.x - frame.origin[0], p.y - frame.origin[1]))
-                .collect();
-            let mid = (e[0] + e[1]) / 2.0;
-            WallName::ALL.iter().find_map(|&w| {
-                let g = WallGeometry::of(w, frame.size_m);
-                (g.distance(&mid).abs() < 0.2).then(|| {
-                    let (a, b) = (g.position(&e[0]), g.position(&e[1]));
-                    (w, [a.min(b), a.max(b)], o.z)
-                })
-            })
-        })
-        .collect();
+    let truth: Vec<(WallName, [f64; 2], [f64; 2])> =
+        crate::plastering::room_openings(layout, frame)
+            .filter(|(o, _, _)| matches!(o.kind, OpeningKind::Window | OpeningKind::GlazedWindow))
+            .map(|(o, wall, along)| (wall, along, o.z))
+            .collect();
     let overlaps = |tw: WallName, a: &[f64; 2], z: &[f64; 2], wall, w: &stucco_nav::Window| {
         tw == wall
             && a[0] < w.along_m[1]
