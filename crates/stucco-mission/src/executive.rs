@@ -665,6 +665,15 @@ impl Executive {
             };
             checkpoint_due |= unit_done | std::mem::take(&mut self.stroke_done);
             drive = self.supervise(now, cmd, inputs, dt, &mut checkpoint_due);
+        } else {
+            // Standing (done, paused, waiting for an e-stop's release):
+            // what the supervisor holds the robot for is still told as it
+            // changes — a hold that has gone is cleared — with no timers
+            // run (a lost estimate fails nothing that is not running).
+            let verdict =
+                self.supervisor
+                    .check(DriveCommand::STOP, inputs.obstacles, inputs.estimate, dt);
+            self.note_hazard(now, verdict.hazard);
         }
         // Plaster flows only while the mission runs and the supervisor
         // lets the robot be.
@@ -966,6 +975,17 @@ impl Executive {
         self.emit(now, EventKind::MissionFailed { reason });
     }
 
+    /// What the supervisor holds the robot for now, told when it changes.
+    fn note_hazard(&mut self, now: Stamp, hazard: Option<Hazard>) {
+        if hazard != self.hazard {
+            match hazard {
+                Some(h) => self.emit(now, EventKind::SafetyStop { hazard: h }),
+                None => self.emit(now, EventKind::SafetyClear),
+            }
+            self.hazard = hazard;
+        }
+    }
+
     /// The supervisor over the task's command.
     fn supervise(
         &mut self,
@@ -978,13 +998,7 @@ impl Executive {
         let verdict = self
             .supervisor
             .check(cmd, inputs.obstacles, inputs.estimate, dt);
-        if verdict.hazard != self.hazard {
-            match verdict.hazard {
-                Some(h) => self.emit(now, EventKind::SafetyStop { hazard: h }),
-                None => self.emit(now, EventKind::SafetyClear),
-            }
-            self.hazard = verdict.hazard;
-        }
+        self.note_hazard(now, verdict.hazard);
         let safety = self.config.safety.clone();
         match verdict.hazard {
             Some(Hazard::Lost) => {

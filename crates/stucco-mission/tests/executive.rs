@@ -27,6 +27,8 @@ struct Robot {
     /// The plan's room the pose is in, and its size.
     room: Option<usize>,
     room_m: [f64; 2],
+    /// σ of the position, m.
+    position_sigma: f64,
 }
 
 impl Robot {
@@ -41,6 +43,7 @@ impl Robot {
             doors: Vec::new(),
             room: None,
             room_m: ROOM,
+            position_sigma: 0.003,
         }
     }
 
@@ -48,7 +51,7 @@ impl Robot {
         Estimate {
             stamp: self.now,
             pose: self.pose,
-            position_sigma_m: 0.003,
+            position_sigma_m: self.position_sigma,
             heading_sigma_rad: 0.002,
             room_m: self.room_m,
             room_sigma_m: self.room_sigma,
@@ -1407,4 +1410,24 @@ fn the_operator_has_a_region_of_a_wall_plastered() {
         }
     }
     assert!(strokes >= 5, "{strokes} strokes");
+}
+
+/// A mission that is over still says what would hold the robot, and
+/// clears it when it has gone: the estimate lost after the last task (as
+/// when the frame has just moved through a door), then found again.
+#[test]
+fn a_hold_is_told_and_cleared_while_the_mission_stands() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(vec![forward(0.3)], true);
+    run(&mut exec, &mut robot, 30.0, |_, _| Vec::new());
+    assert_eq!(exec.mode(), &MissionMode::Done);
+    robot.position_sigma = 0.2;
+    let out = ask(&mut exec, &robot, Seen::default());
+    assert_eq!(exec.hazard(), Some(Hazard::Lost));
+    assert_eq!(kinds(&out.events), ["safety_stop"]);
+    robot.position_sigma = 0.003;
+    let out = ask(&mut exec, &robot, Seen::default());
+    assert_eq!(exec.hazard(), None);
+    assert_eq!(kinds(&out.events), ["safety_clear"]);
+    assert_eq!(exec.mode(), &MissionMode::Done);
 }
