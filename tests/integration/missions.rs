@@ -195,6 +195,42 @@ fn a_bad_task_names_file_line_and_key() {
     );
 }
 
+/// A checkpoint made on one drawing of the building is refused when the
+/// plan file the mission names has changed since (its doors are numbered
+/// by the plan), and the checkpoint is kept.
+#[test]
+fn a_checkpoint_of_another_plan_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let plan = dir.path().join("plan.toml");
+    std::fs::copy(root.join("missions/plans/office-floor.toml"), &plan).unwrap();
+    let text = std::fs::read_to_string(root.join("missions/office-rounds.toml"))
+        .unwrap()
+        .replace(
+            "../sim/worlds/floor.toml",
+            &root.join("sim/worlds/floor.toml").display().to_string(),
+        )
+        .replace("plans/office-floor.toml", "plan.toml");
+    let path = dir.path().join("rounds.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("out");
+    run(&path, Some(&out), false, Some(5.0)).unwrap();
+    let checkpoint = std::fs::read_to_string(out.join("checkpoint.json")).unwrap();
+    // The drawing changes: a door moved.
+    let drawn = std::fs::read_to_string(&plan).unwrap();
+    std::fs::write(
+        &plan,
+        drawn.replace("at_m = [8.0, 3.075]", "at_m = [8.2, 3.075]"),
+    )
+    .unwrap();
+    let err = run(&path, Some(&out), true, None).unwrap_err();
+    assert!(format!("{err:#}").contains("not this file"), "{err:#}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("checkpoint.json")).unwrap(),
+        checkpoint
+    );
+}
+
 /// A floor plan's fault is refused with the file, the line and the
 /// field: a door that lies in no wall of its rooms, a room the plan does
 /// not have in `go_to_room` or `[start]`, a plan with a room size given

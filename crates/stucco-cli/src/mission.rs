@@ -406,6 +406,9 @@ impl Mission {
         if let Some(s) = &self.start {
             let t = "start";
             match (&s.room_m, &s.room, self.rooms.is_empty()) {
+                (_, Some(_), true) => {
+                    return Some((t, "room", "no floor plan ([[room]], [[door]])"));
+                }
                 (Some(r), None, true) if !size(r) => {
                     return Some((t, "room_m", "sides must be positive"));
                 }
@@ -418,9 +421,6 @@ impl Mission {
                 }
                 (Some(_), Some(_), false) => {
                     return Some((t, "room_m", "the floor plan gives the room's size"));
-                }
-                (_, Some(_), true) => {
-                    return Some((t, "room", "no floor plan ([[room]], [[door]])"));
                 }
                 (None, Some(_), false) => {}
             }

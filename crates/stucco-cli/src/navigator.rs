@@ -515,6 +515,24 @@ impl Navigator {
             // Back in a room: what was learnt of it stays, the pose is new.
             Some(mut view) => {
                 let (vx, vp) = view.ekf.now();
+                // Anchored on the door as this room's filter learnt it,
+                // not as the plan draws it.
+                let learnt = view
+                    .ekf
+                    .doors()
+                    .iter()
+                    .zip(&view.door_info)
+                    .find(|(_, i)| i.plan_door == Some(door))
+                    .map(|(d, _)| vx[d.index]);
+                let at = match (plan.side(door, next), learnt) {
+                    (Some(s), Some(along)) => {
+                        let drawn = WallGeometry::of(s.wall, plan.rooms()[next].size_m)
+                            .point(s.along_m, 0.0);
+                        let seen = WallGeometry::of(s.wall, [vx[3], vx[4]]).point(along, 0.0);
+                        Pose2::new(at.x + seen.x - drawn.x, at.y + seen.y - drawn.y, at.theta)
+                    }
+                    _ => at,
+                };
                 p0.fixed_view_mut::<2, 2>(3, 3)
                     .copy_from(&vp.fixed_view::<2, 2>(3, 3));
                 let x0 = RoomState::new(at.x, at.y, at.theta, vx[3], vx[4]);

@@ -3,7 +3,7 @@
 
 use crate::mission::{BadInput, Mission};
 use crate::navigator::DT_S;
-use crate::task_mission::{mission_navigator, mission_room};
+use crate::task_mission::mission_navigator;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -83,13 +83,6 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
     // The robot is put at the world's start, in the room frame of the room
     // it stands in.
     let (mut nav, _) = mission_navigator(&mission, &world, mission.seed, None)?;
-    if let (Some(plan), Some(room)) = (mission.floor_plan(), mission_room(&mission, None)?) {
-        nav.follow_plan(
-            plan,
-            room,
-            mission.start.as_ref().map_or(0.0, |s| s.room_sigma_m),
-        );
-    }
     nav.discover_doors(true);
     let mut exec = mission.executive(false);
     let session = match stucco_link::open(&job.link) {

@@ -373,12 +373,26 @@ pub fn run_task_mission(
         )
         .into());
     }
+    // What a checkpoint must have been made with: the mission file and the
+    // building plan it names (door numbers in the checkpoint are the plan's).
+    let fingerprint = match &mission.plan {
+        Some(file) => {
+            let path = job
+                .mission
+                .parent()
+                .map_or_else(|| file.clone(), |d| d.join(file));
+            let plan = std::fs::read_to_string(&path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            format!("{text}\n{plan}")
+        }
+        None => text.clone(),
+    };
     let mut seed = job.seed.unwrap_or(mission.seed);
     let mut resume = None;
     if job.resume
         && let Some(dir) = &job.out
     {
-        let cp = read_checkpoint(&dir.join("checkpoint.json"), &mission, &text)?;
+        let cp = read_checkpoint(&dir.join("checkpoint.json"), &mission, &fingerprint)?;
         seed = job.seed.unwrap_or(cp.seed);
         resume = Some(cp);
     }
@@ -387,6 +401,7 @@ pub fn run_task_mission(
         mission_path: &job.mission,
         record: job.record,
         text: &text,
+        fingerprint: &fingerprint,
         world: &world,
         resume: resume.as_ref(),
         stop_after: job.stop_after_s,
@@ -507,8 +522,11 @@ struct Setup<'a> {
     mission_path: &'a Path,
     /// Record each run to `run.mcap`.
     record: bool,
-    /// The mission file's text (for the checkpoint's digest).
+    /// The mission file's text (for the recording).
     text: &'a str,
+    /// The mission file's and its plan's text (for the checkpoint's
+    /// digest).
+    fingerprint: &'a str,
     world: &'a WorldSpec,
     resume: Option<&'a Checkpoint>,
     stop_after: Option<f64>,
@@ -526,6 +544,7 @@ fn run_once(
         mission_path,
         record,
         text,
+        fingerprint,
         world,
         resume,
         stop_after,
@@ -540,26 +559,13 @@ fn run_once(
     }
     let (mut nav, start_frame) =
         mission_navigator(mission, &world, seed, resume.map(|cp| &cp.map))?;
-    if let Some(cp) = resume {
-        for d in &cp.map.doors {
-            nav.add_known_door(d);
-        }
+    if resume.is_some() {
         // The plaster stays on the walls when the robot stops.
         if let Some(dir) = out
             && dir.join(WORLD_FILE).exists()
         {
             crate::plastering::WorldState::load(&dir.join(WORLD_FILE))?.restore(nav.sim_mut());
         }
-    }
-    if let Some((plan, room)) = mission
-        .floor_plan()
-        .zip(mission_room(mission, resume.map(|cp| &cp.map))?)
-    {
-        nav.follow_plan(
-            plan,
-            room,
-            mission.start.as_ref().map_or(0.0, |s| s.room_sigma_m),
-        );
     }
     // The truth in the frame of the room the robot is in (scoring only).
     let mut frame = start_frame;
@@ -629,7 +635,7 @@ fn run_once(
             let est = nav.mission_estimate();
             let cp = Checkpoint {
                 mission: mission.name.clone(),
-                digest: digest(text),
+                digest: digest(fingerprint),
                 seed,
                 progress,
                 map: RoomMap {
@@ -901,7 +907,7 @@ fn run_once(
         // This run's plastering time (a resumed run's: its own part).
         let seconds = plans
             .keys()
-            .filter_map(|&t| task_seconds[t])
+            .filter_map(|&t| task_seconds.get(t).copied().flatten())
             .reduce(|a, b| a + b);
         let bound: f64 = plans
             .values()
@@ -1175,7 +1181,19 @@ pub(crate) fn mission_navigator(
         ),
     };
     let sprayer = mission.spray.as_ref().map(crate::plastering::sprayer_of);
-    let nav = Navigator::with_sprayer(world, seed, x0, size_sigma, sprayer)?;
+    let mut nav = Navigator::with_sprayer(world, seed, x0, size_sigma, sprayer)?;
+    // The doors it knew, before the plan's (those it holds are not added
+    // twice).
+    for d in resume.iter().flat_map(|m| &m.doors) {
+        nav.add_known_door(d);
+    }
+    if let (Some(plan), Some(room)) = (mission.floor_plan(), mission_room(mission, resume)?) {
+        // Scoring follows the robot into each room by its name.
+        for r in plan.rooms() {
+            RoomFrame::named(&layout, &r.name)?;
+        }
+        nav.follow_plan(plan, room, known.room_sigma_m);
+    }
     Ok((nav, frame))
 }
 

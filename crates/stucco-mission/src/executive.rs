@@ -370,6 +370,26 @@ struct Doorway {
     speed_mps: f64,
 }
 
+impl Doorway {
+    /// Through `door` first, then `hops`, each passage from `approach_m`
+    /// before to `beyond_m` beyond at `speed_mps`.
+    fn through(
+        door: usize,
+        hops: VecDeque<usize>,
+        [approach_m, beyond_m, speed_mps]: [f64; 3],
+    ) -> Self {
+        Doorway {
+            through: Some(door),
+            hops,
+            entering: None,
+            passed: None,
+            approach_m,
+            beyond_m,
+            speed_mps,
+        }
+    }
+}
+
 /// The executive.
 #[derive(Clone, Debug)]
 pub struct Executive {
@@ -673,7 +693,11 @@ impl Executive {
             let verdict =
                 self.supervisor
                     .check(DriveCommand::STOP, inputs.obstacles, inputs.estimate, dt);
-            self.note_hazard(now, verdict.hazard);
+            // A standing robot's path is empty: an obstacle hold stays as
+            // it was until the robot would move again.
+            if self.hazard != Some(Hazard::Obstacle) {
+                self.note_hazard(now, verdict.hazard);
+            }
         }
         // Plaster flows only while the mission runs and the supervisor
         // lets the robot be.
@@ -1282,15 +1306,11 @@ impl Executive {
                 if let (Some(plan_door), Some(_), Some(_)) =
                     (d.plan_door, &self.config.floor, est.room)
                 {
-                    doorway = Some(Doorway {
-                        through: Some(plan_door),
-                        hops: VecDeque::new(),
-                        entering: None,
-                        passed: None,
-                        approach_m: *approach_m,
-                        beyond_m: *beyond_m,
-                        speed_mps: *speed_mps,
-                    });
+                    doorway = Some(Doorway::through(
+                        plan_door,
+                        VecDeque::new(),
+                        [*approach_m, *beyond_m, *speed_mps],
+                    ));
                 }
             }
             TaskSpec::GoToRoom {
@@ -1308,15 +1328,11 @@ impl Executive {
                         [*approach_m, *beyond_m],
                         *speed_mps,
                     )?);
-                    doorway = Some(Doorway {
-                        through: Some(first),
+                    doorway = Some(Doorway::through(
+                        first,
                         hops,
-                        entering: None,
-                        passed: None,
-                        approach_m: *approach_m,
-                        beyond_m: *beyond_m,
-                        speed_mps: *speed_mps,
-                    });
+                        [*approach_m, *beyond_m, *speed_mps],
+                    ));
                 }
             }
         }
@@ -1359,10 +1375,8 @@ impl Executive {
             return Err("go_to_room: the robot does not know which room it is in".into());
         };
         floor.route(here, to).ok_or_else(|| {
-            format!(
-                "go_to_room: no way on the plan from {} to {room}",
-                floor.rooms()[here].name
-            )
+            let from = floor.rooms().get(here).map_or("here", |r| r.name.as_str());
+            format!("go_to_room: no way on the plan from {from} to {room}")
         })
     }
 
@@ -2090,7 +2104,8 @@ fn lane_entry(floor: &Floor, run: &PlasterRun, k: usize) -> Option<(Pose2, bool)
     let off = dist.max(clearance);
     let clear = |a: f64| {
         let e = line.point(a, off);
-        turn_clear(run, &e, clearance) && floor.sweep_clear(&e, &goal.position().coords, &heading)
+        floor.turnable_among_obstacles(&e)
+            && floor.sweep_clear(&e, &goal.position().coords, &heading)
     };
     let candidates = (0..200)
         .flat_map(|k| [want - dir * 0.05 * k as f64, want + dir * 0.05 * k as f64])
@@ -2113,16 +2128,6 @@ fn lane_entry(floor: &Floor, run: &PlasterRun, k: usize) -> Option<(Pose2, bool)
     Some(match beyond {
         Some(a) => (pose(a), false),
         None => (pose(want), true),
-    })
-}
-
-/// True when nothing the plan knows on the floor stands within `radius`
-/// of `p`.
-fn turn_clear(run: &PlasterRun, p: &nalgebra::Vector2<f64>, radius: f64) -> bool {
-    run.plan.room.obstacles.iter().all(|o| {
-        let dx = (o.min_m[0] - p.x).max(p.x - o.max_m[0]).max(0.0);
-        let dy = (o.min_m[1] - p.y).max(p.y - o.max_m[1]).max(0.0);
-        dx.hypot(dy) >= radius
     })
 }
 
@@ -2156,7 +2161,7 @@ fn lane_exit(
         .filter(|a| (lo..=hi).contains(a))
         .find(|a| {
             let o = line.point(*a, off);
-            turn_clear(run, &o, clearance) && floor.sweep_clear(&p, &o, &heading)
+            floor.turnable_among_obstacles(&o) && floor.sweep_clear(&p, &o, &heading)
         })
         .unwrap_or(want);
     let o = line.point(out_at, off);

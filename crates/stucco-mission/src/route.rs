@@ -74,18 +74,19 @@ impl<'a> Floor<'a> {
         }
     }
 
-    /// True when the body, facing `facing` (a unit vector) and moved along
-    /// it from `a` to `b` (forward or backing), touches nothing: the
-    /// rectangle it sweeps, from its rear at the hindmost place to its
-    /// front at the foremost, its width across, against each obstacle
+    /// True when the body, facing `facing` (a unit vector) and moved from
+    /// `a` to `b` (forward or backing, drifting sideways as the line law
+    /// takes it onto a parallel line), touches nothing: the rectangle it
+    /// sweeps, from its rear at the hindmost place to its front at the
+    /// foremost and across both sideways places, against each obstacle
     /// grown by the margin (separating axes).
     pub fn sweep_clear(&self, a: &Vector2<f64>, b: &Vector2<f64>, facing: &Vector2<f64>) -> bool {
-        let s = facing.dot(&(b - a));
-        let (back, ahead) = (s.min(0.0) - self.rear_m, s.max(0.0) + self.front_m);
         let f = *facing;
         let n = Vector2::new(-f.y, f.x);
-        let c = a + f * (0.5 * (back + ahead));
-        let (hl, hw) = (0.5 * (ahead - back), self.half_width_m);
+        let (s, l) = (f.dot(&(b - a)), n.dot(&(b - a)));
+        let (back, ahead) = (s.min(0.0) - self.rear_m, s.max(0.0) + self.front_m);
+        let c = a + f * (0.5 * (back + ahead)) + n * (0.5 * l);
+        let (hl, hw) = (0.5 * (ahead - back), self.half_width_m + 0.5 * l.abs());
         self.obstacles.iter().all(|o| {
             let bc = Vector2::new(
                 0.5 * (o.min_m[0] + o.max_m[0]),
@@ -103,11 +104,19 @@ impl<'a> Floor<'a> {
         })
     }
 
+    /// True when nothing on the floor stands within the turning clearance
+    /// of `p` (the walls not looked at).
+    pub fn turnable_among_obstacles(&self, p: &Vector2<f64>) -> bool {
+        self.nearest(p) >= self.clearance_m
+    }
+
     /// True when the robot can turn on the spot at `p`.
     fn turnable(&self, p: &Vector2<f64>) -> bool {
         let c = self.clearance_m;
         let [xs, ys] = self.room_m;
-        (c..=xs - c).contains(&p.x) && (c..=ys - c).contains(&p.y) && self.nearest(p) >= c
+        (c..=xs - c).contains(&p.x)
+            && (c..=ys - c).contains(&p.y)
+            && self.turnable_among_obstacles(p)
     }
 
     /// The places to turn at between `from` and `to` (both where the
@@ -228,6 +237,12 @@ mod tests {
         let (a, b) = (Vector2::new(1.9, 2.5), Vector2::new(1.2, 2.5));
         assert!(!floor.sweep_clear(&a, &b, &east));
         let (a, b) = (Vector2::new(1.1, 2.5), Vector2::new(0.6, 2.5));
+        assert!(floor.sweep_clear(&a, &b, &east));
+        // Drifting sideways onto a line past the table's edge, facing
+        // along it: what lies between the two lines counts.
+        let (a, b) = (Vector2::new(2.6, 4.3), Vector2::new(3.6, 3.4));
+        assert!(!floor.sweep_clear(&a, &b, &east));
+        let (a, b) = (Vector2::new(3.4, 4.3), Vector2::new(4.4, 3.4));
         assert!(floor.sweep_clear(&a, &b, &east));
     }
 
