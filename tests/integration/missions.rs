@@ -263,6 +263,15 @@ fn a_bad_floor_plan_names_file_line_and_field() {
         err.contains("plan.toml:26") && err.contains("kitchen"),
         "{err}"
     );
+    // A room no door leads to.
+    let island = "[[room]]\nname = \"store\"\norigin_m = [20.0, 0.0]\nsize_m = [2.0, 2.0]\n\n";
+    let err = load(format!(
+        "{head}{island}{door}[[task]]\ntask = \"go_to_room\"\nroom = \"store\"\n"
+    ));
+    assert!(
+        err.contains("plan.toml:31") && err.contains("no way"),
+        "{err}"
+    );
     let err = load(format!("{head}{door}{task}").replace("room = \"hall\"", "room = \"lobby\""));
     assert!(
         err.contains("plan.toml:6") && err.contains("lobby"),

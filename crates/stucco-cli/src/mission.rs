@@ -294,16 +294,37 @@ impl Mission {
                 line_of(&text, "start", "room")
             );
         }
+        // The room the robot is in, task by task, while it can be told (a
+        // pass_door leads where its door does, known only when it runs).
+        let mut here = plan
+            .as_ref()
+            .zip(mission.start.as_ref().and_then(|s| s.room.as_ref()))
+            .and_then(|(p, name)| p.room(name));
         for (i, task) in mission.tasks.iter().enumerate() {
-            if let TaskSpec::GoToRoom { room, .. } = task
-                && plan.as_ref().is_none_or(|p| p.room(room).is_none())
-            {
-                bad!(
-                    "{}:{}: task {} (go_to_room): room: no room {room:?} on the floor plan",
-                    path.display(),
-                    line_of_array(&text, "task", i, "room"),
-                    i + 1
-                );
+            if let TaskSpec::GoToRoom { room, .. } = task {
+                let Some(to) = plan.as_ref().and_then(|p| p.room(room)) else {
+                    bad!(
+                        "{}:{}: task {} (go_to_room): room: no room {room:?} on the floor plan",
+                        path.display(),
+                        line_of_array(&text, "task", i, "room"),
+                        i + 1
+                    );
+                };
+                if let (Some(p), Some(from)) = (&plan, here)
+                    && p.route(from, to).is_none()
+                {
+                    bad!(
+                        "{}:{}: task {} (go_to_room): room: no way through the plan's doors from {:?} to {room:?}",
+                        path.display(),
+                        line_of_array(&text, "task", i, "room"),
+                        i + 1,
+                        p.rooms()[from].name
+                    );
+                }
+                here = Some(to);
+            }
+            if matches!(task, TaskSpec::PassDoor { .. }) {
+                here = None;
             }
             if matches!(task, TaskSpec::Plaster { .. }) && mission.spray.is_none() {
                 bad!(
