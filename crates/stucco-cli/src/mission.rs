@@ -70,6 +70,9 @@ pub struct Mission {
     /// The plan's doors between those rooms (`[[door]]`).
     #[serde(default, rename = "door")]
     pub doors: Vec<PlanDoor>,
+    /// The plan of `rooms` and `doors`, checked once at load.
+    #[serde(skip)]
+    floor: Option<FloorPlan>,
     /// A task mission fails when it takes longer than this, simulated s.
     #[serde(default = "time_limit")]
     pub time_limit_s: f64,
@@ -284,6 +287,7 @@ impl Mission {
             Some((plan_text, plan_path)) => mission.checked_plan(plan_text, plan_path)?,
             None => mission.checked_plan(&text, path)?,
         };
+        mission.floor = plan.clone();
         if let (Some(plan), Some(name)) =
             (&plan, mission.start.as_ref().and_then(|s| s.room.as_ref()))
             && plan.room(name).is_none()
@@ -374,10 +378,7 @@ impl Mission {
 
     /// The floor plan (`[[room]]`, `[[door]]`), when the mission has one.
     pub fn floor_plan(&self) -> Option<FloorPlan> {
-        if self.rooms.is_empty() && self.doors.is_empty() {
-            return None;
-        }
-        FloorPlan::new(self.rooms.clone(), self.doors.clone()).ok()
+        self.floor.clone()
     }
 
     /// The size of the room the robot starts in, as planned, and the

@@ -85,6 +85,18 @@ impl RoomView {
         self.ekf.add_door(wall, position_m, sigma_m).index
     }
 
+    /// Where the filter puts the plan's `door` along its wall, and the
+    /// variance of that.
+    fn door_estimate(&self, door: usize) -> Option<(f64, f64)> {
+        let (x, p) = self.ekf.now();
+        self.ekf
+            .doors()
+            .iter()
+            .zip(&self.door_info)
+            .find(|(_, i)| i.plan_door == Some(door))
+            .map(|(d, _)| (x[d.index], p[(d.index, d.index)].max(0.0)))
+    }
+
     /// A room known only by its filter's first state.
     fn new(ekf: RoomEkf) -> Self {
         RoomView {
@@ -445,8 +457,13 @@ impl Navigator {
 
     /// The floor plan's room the robot is in, by name.
     pub fn room_name(&self) -> Option<&str> {
-        let (plan, room, _) = self.plan.as_ref()?;
-        plan.rooms().get(*room).map(|r| r.name.as_str())
+        self.plan_room_name(self.plan.as_ref()?.1)
+    }
+
+    /// The name of the plan's room `r`.
+    fn plan_room_name(&self, r: usize) -> Option<&str> {
+        let (plan, _, _) = self.plan.as_ref()?;
+        plan.rooms().get(r).map(|r| r.name.as_str())
     }
 
     /// Moves the robot's frame into the room beyond `door` of the floor
@@ -483,15 +500,10 @@ impl Navigator {
         let (x, p) = self.room.ekf.now();
         let pose = Pose2::new(x[0], x[1], x[2]);
         let size = [x[3], x[4]];
-        let known = self
+        let (along, door_var) = self
             .room
-            .ekf
-            .doors()
-            .iter()
-            .zip(&self.room.door_info)
-            .find(|(_, i)| i.plan_door == Some(door))
-            .map(|(d, _)| (x[d.index], p[(d.index, d.index)].max(0.0)));
-        let (along, door_var) = known.unwrap_or((side.along_m, sigma * sigma));
+            .door_estimate(door)
+            .unwrap_or((side.along_m, sigma * sigma));
         let inside = WallGeometry::of(side.wall, size).distance(&pose.position().coords);
         if inside >= 0.0 {
             return Err(format!(
@@ -499,8 +511,15 @@ impl Navigator {
                 name(room)
             ));
         }
+        // A room entered again is anchored on its door as its filter
+        // learnt it, not as the plan draws it.
+        let there = plan.beyond(door, room).and_then(|next| {
+            let view = self.parked.get(&next)?;
+            let (vx, _) = view.ekf.now();
+            Some((view.door_estimate(door)?.0, [vx[3], vx[4]]))
+        });
         let (next, at) = plan
-            .transfer(door, room, &pose, along, size)
+            .transfer(door, room, &pose, (along, size), there)
             .ok_or_else(|| format!("door {door} of the plan leads nowhere from {}", name(room)))?;
         // The pose's own uncertainty, the door's place here and the plan's
         // place of it there.
@@ -515,24 +534,6 @@ impl Navigator {
             // Back in a room: what was learnt of it stays, the pose is new.
             Some(mut view) => {
                 let (vx, vp) = view.ekf.now();
-                // Anchored on the door as this room's filter learnt it,
-                // not as the plan draws it.
-                let learnt = view
-                    .ekf
-                    .doors()
-                    .iter()
-                    .zip(&view.door_info)
-                    .find(|(_, i)| i.plan_door == Some(door))
-                    .map(|(d, _)| vx[d.index]);
-                let at = match (plan.side(door, next), learnt) {
-                    (Some(s), Some(along)) => {
-                        let drawn = WallGeometry::of(s.wall, plan.rooms()[next].size_m)
-                            .point(s.along_m, 0.0);
-                        let seen = WallGeometry::of(s.wall, [vx[3], vx[4]]).point(along, 0.0);
-                        Pose2::new(at.x + seen.x - drawn.x, at.y + seen.y - drawn.y, at.theta)
-                    }
-                    _ => at,
-                };
                 p0.fixed_view_mut::<2, 2>(3, 3)
                     .copy_from(&vp.fixed_view::<2, 2>(3, 3));
                 let x0 = RoomState::new(at.x, at.y, at.theta, vx[3], vx[4]);
@@ -648,17 +649,11 @@ impl Navigator {
     /// The windows found in every room the robot has been in: the plan's
     /// name of the room (none without a plan: the one room), wall by wall.
     pub fn windows_by_room(&self) -> Vec<RoomWindows<'_>> {
-        let name = |r: usize| {
-            self.plan
-                .as_ref()
-                .and_then(|(plan, _, _)| plan.rooms().get(r))
-                .map(|r| r.name.as_str())
-        };
         let mut out = vec![(self.room_name(), room_windows(&self.room))];
         out.extend(
             self.parked
                 .iter()
-                .map(|(&r, view)| (name(r), room_windows(view))),
+                .map(|(&r, view)| (self.plan_room_name(r), room_windows(view))),
         );
         out
     }

@@ -272,6 +272,49 @@ mod tests {
         }
     }
 
+    /// A region and a landmark are read with their fields; a field they
+    /// do not have, or a landmark that is not one, is refused naming it.
+    #[test]
+    fn a_region_and_a_landmark_name_what_is_wrong() {
+        let plaster = |region: &str| {
+            serde_json::from_str::<Command>(&format!(
+                r#"{{"type": "plaster_surface", "surface": {{"wall": "south"}}, "region": {region}}}"#
+            ))
+        };
+        assert_eq!(
+            plaster(r#"{"along_m": [1.0, 2.5], "height_m": [0.0, 1.2]}"#).unwrap(),
+            Command::PlasterSurface {
+                surface: SurfaceName::Wall(WallName::South),
+                region: Some(Region {
+                    along_m: [1.0, 2.5],
+                    height_m: [0.0, 1.2],
+                }),
+            }
+        );
+        let e = plaster(r#"{"along_m": [1.0, 2.5], "height": [0.0, 1.2]}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`height`") && e.contains("`height_m`"), "{e}");
+        let e = plaster(r#"{"along_m": [1.0, 2.5]}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`height_m`"), "{e}");
+        let moving = |landmark: &str| {
+            serde_json::from_str::<Command>(&format!(
+                r#"{{"type": "move_relative", "dx_m": -1.0, "dy_m": 0.0, "dtheta_deg": 0.0, "landmark": {landmark}}}"#
+            ))
+        };
+        assert!(matches!(
+            moving(r#"{"door": 2}"#).unwrap(),
+            Command::MoveRelative {
+                landmark: Some(Landmark::Door(2)),
+                ..
+            }
+        ));
+        let e = moving(r#"{"window": 1}"#).unwrap_err().to_string();
+        assert!(e.contains("`window`") && e.contains("`door`"), "{e}");
+    }
+
     #[test]
     fn telecommands_read_as_json_any_client_can_write() {
         let t: Telecommand = serde_json::from_str(

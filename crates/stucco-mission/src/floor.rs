@@ -267,18 +267,20 @@ impl FloorPlan {
     }
 
     /// The pose in the frame of the room beyond `door` of a robot at
-    /// `pose` in the frame of `room`, which puts the door's middle at
-    /// `along_m` along its wall and is `size_m` in size (the filter's
-    /// estimate): the door anchors the two frames, so an error of the plan
-    /// elsewhere in the room does not carry over.
+    /// `pose` in the frame of `room`. `here` is where the filter puts the
+    /// door's middle along its wall and the room's size; `there`, the same
+    /// for the room beyond when the robot has learnt it (none: as drawn).
+    /// The door anchors the two frames, so an error of the plan elsewhere
+    /// in either room does not carry over.
     pub fn transfer(
         &self,
         door: usize,
         room: usize,
         pose: &Pose2,
-        along_m: f64,
-        size_m: [f64; 2],
+        here: (f64, [f64; 2]),
+        there: Option<(f64, [f64; 2])>,
     ) -> Option<(usize, Pose2)> {
+        let ((along_m, size_m), far) = (here, self.side(door, self.beyond(door, room)?)?);
         let here = self.side(door, room)?;
         let next = self.beyond(door, room)?;
         let (a, b) = (&self.rooms[room], &self.rooms[next]);
@@ -287,7 +289,11 @@ impl FloorPlan {
         let plan = WallGeometry::of(here.wall, a.size_m).point(here.along_m, 0.0);
         let p = pose.position().coords + (plan - est);
         let shift = Vector2::from(a.origin_m) - Vector2::from(b.origin_m);
-        let q = p + shift;
+        let mut q = p + shift;
+        if let Some((along, size)) = there {
+            let drawn = WallGeometry::of(far.wall, b.size_m).point(far.along_m, 0.0);
+            q += WallGeometry::of(far.wall, size).point(along, 0.0) - drawn;
+        }
         Some((next, Pose2::new(q.x, q.y, pose.theta)))
     }
 }
@@ -376,7 +382,7 @@ mod tests {
         // filter puts the door 3 cm east of the plan and the corridor
         // 2 cm wider.
         let pose = Pose2::new(2.0, 2.4, 1.5);
-        let (room, q) = p.transfer(0, 0, &pose, 2.03, [10.0, 2.02]).unwrap();
+        let (room, q) = p.transfer(0, 0, &pose, (2.03, [10.0, 2.02]), None).unwrap();
         assert_eq!(room, 1);
         // The door's middle: (2.03, 2.02) in the filter's corridor, so
         // the robot is 3 cm west of it and 0.38 m beyond the wall line,
@@ -384,7 +390,16 @@ mod tests {
         assert!((q.x - 1.97).abs() < 1e-9, "{q:?}");
         assert!((q.y - 0.18).abs() < 1e-9, "{q:?}");
         assert_eq!(q.theta, 1.5);
-        assert_eq!(p.transfer(0, 2, &pose, 0.0, [1.0, 1.0]), None);
+        assert_eq!(p.transfer(0, 2, &pose, (0.0, [1.0, 1.0]), None), None);
+        // Room a as the robot learnt it: its south wall's door 2 cm west of
+        // the drawing's, the room as drawn; the pose follows the door.
+        let (_, r) = p
+            .transfer(0, 0, &pose, (2.03, [10.0, 2.02]), Some((1.98, [4.9, 4.0])))
+            .unwrap();
+        assert!(
+            (r.x - 1.95).abs() < 1e-9 && (r.y - 0.18).abs() < 1e-9,
+            "{r:?}"
+        );
     }
 
     #[test]

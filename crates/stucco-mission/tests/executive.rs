@@ -86,7 +86,7 @@ impl Robot {
         let room = self.room.unwrap();
         let along = plan.side(door, room).unwrap().along_m;
         let (next, pose) = plan
-            .transfer(door, room, &self.pose, along, self.room_m)
+            .transfer(door, room, &self.pose, (along, self.room_m), None)
             .unwrap();
         self.in_room(plan, next);
         self.pose = pose;
