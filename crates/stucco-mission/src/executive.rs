@@ -4,6 +4,7 @@
 
 use crate::behaviour::{Behaviour, BehaviourKind, Step, go_to};
 use crate::floor::FloorPlan;
+use crate::manoeuvre::{self, Space};
 use crate::model::{DoorEstimate, Estimate, WallGeometry, pose_at_wall};
 use crate::plaster::{Cursor, Phase, PlasterCoverage, PlasterProgress, PlasterRun, plan_digest};
 use crate::route::{Floor, route};
@@ -44,6 +45,17 @@ const RUN_IN_M: f64 = 2.0;
 /// The shortest run-in accepted near a corner, m (a 0.3 m offset settles
 /// to about a centimetre).
 const MIN_RUN_IN_M: f64 = 1.5;
+/// A robot this near a door's line and this near its heading is on it,
+/// m and rad.
+const ON_LINE_M: f64 = 0.03;
+const ON_LINE_RAD: f64 = 0.05;
+/// Seconds blocked on the way to a door before the way is planned again.
+const REPLAN_AFTER_S: f64 = 2.0;
+/// Times the way to one door may be planned again.
+const MAX_REPLANS: usize = 3;
+/// Room left between the body and the far wall at a door's approach and
+/// beyond it, m (the protective field's margin and a little).
+const DOOR_FIT_M: f64 = 0.1;
 
 /// What the operator (or a script standing in for one) asks of the
 /// executive.
@@ -368,6 +380,8 @@ struct Doorway {
     approach_m: f64,
     beyond_m: f64,
     speed_mps: f64,
+    /// Times the way to the door was planned again.
+    replans: usize,
 }
 
 impl Doorway {
@@ -386,6 +400,7 @@ impl Doorway {
             approach_m,
             beyond_m,
             speed_mps,
+            replans: 0,
         }
     }
 }
@@ -1038,6 +1053,29 @@ impl Executive {
                 self.lost_since = None;
                 if let Some(a) = self.active.as_mut() {
                     a.blocked_s += dt;
+                    // On the way to a door, something the room's map did
+                    // not hold when the way was planned (furniture first
+                    // seen from the doorway): the way is planned again on
+                    // what the map holds now.
+                    if a.blocked_s > REPLAN_AFTER_S
+                        && !a.queue.is_empty()
+                        && let Some(w) = a.doorway.as_mut()
+                        && w.entering.is_none()
+                        && w.replans < MAX_REPLANS
+                        && let Some(door) = w.through
+                        && let Ok(q) = plan_door_pass(
+                            &self.config,
+                            inputs.estimate,
+                            door,
+                            [w.approach_m, w.beyond_m],
+                            w.speed_mps,
+                        )
+                    {
+                        w.replans += 1;
+                        a.queue = q.into();
+                        a.current = None;
+                        a.blocked_s = 0.0;
+                    }
                     if a.blocked_s > safety.blocked_timeout_s {
                         self.fail(now, "the way stayed blocked".to_owned());
                         *checkpoint_due = true;
@@ -1178,8 +1216,9 @@ impl Executive {
                 let loop_ = closed(&survey_loop(path.as_deref(), *inset_m, est.room_m)?);
                 let (a, b) = (loop_[0], loop_[1]);
                 let towards = (b[1] - a[1]).atan2(b[0] - a[0]);
-                queue.extend(go_to(
-                    gains,
+                queue.extend(way(
+                    &self.config,
+                    est,
                     &pose,
                     &Pose2::new(a[0], a[1], towards),
                     *speed_mps,
@@ -1201,7 +1240,7 @@ impl Executive {
                     Some(l) => landmark_frame(l, est)?,
                 };
                 let goal = frame * Pose2::new(*dx_m, *dy_m, dtheta_deg.to_radians());
-                queue.extend(go_to(gains, &pose, &goal, *speed_mps));
+                queue.extend(way(&self.config, est, &pose, &goal, *speed_mps));
             }
             TaskSpec::AlignToWall {
                 wall,
@@ -1294,12 +1333,15 @@ impl Executive {
                         est.doors.len()
                     ));
                 };
+                let next_depth = d
+                    .plan_door
+                    .and_then(|p| next_room_depth(&self.config, est, p));
                 queue.extend(door_pass(
-                    gains,
-                    &pose,
+                    &self.config,
+                    est,
                     d,
-                    est.room_m,
                     [*approach_m, *beyond_m],
+                    next_depth,
                     *speed_mps,
                 ));
                 // Through a door of the plan, the frame moves on.
@@ -1322,7 +1364,7 @@ impl Executive {
                 let mut hops: VecDeque<usize> = self.route(room, est)?.into();
                 if let Some(first) = hops.pop_front() {
                     queue.extend(plan_door_pass(
-                        gains,
+                        &self.config,
                         est,
                         first,
                         [*approach_m, *beyond_m],
@@ -1384,7 +1426,6 @@ impl Executive {
     /// have gone through a door, the estimate must be in the room beyond
     /// it; then the next door's passage is planned, or the task is done.
     fn step_doorway(&mut self, now: Stamp, est: &Estimate) -> Option<TaskStep> {
-        let gains = self.config.gains.clone();
         let a = self.active.as_mut()?;
         let w = a.doorway.as_mut()?;
         let room = w.entering?;
@@ -1416,7 +1457,13 @@ impl Executive {
         let Some(next) = w.hops.pop_front() else {
             return Some(TaskStep::Done);
         };
-        match plan_door_pass(&gains, est, next, [w.approach_m, w.beyond_m], w.speed_mps) {
+        match plan_door_pass(
+            &self.config,
+            est,
+            next,
+            [w.approach_m, w.beyond_m],
+            w.speed_mps,
+        ) {
             Ok(q) => {
                 w.through = Some(next);
                 a.queue.extend(q);
@@ -2334,34 +2381,101 @@ fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
     p
 }
 
-/// The behaviours through door `d` of the room `room_m` in size: onto the
-/// line across its middle `approach_beyond_m[0]` before it, along the line
-/// to `approach_beyond_m[1]` beyond it.
+/// The behaviours through door `d` of the room `est` knows: onto the line
+/// through its middle `approach` before it, facing out, then along the
+/// line to `beyond` past it. Standing on that line facing into the room
+/// (just come in through the door), the robot may back out instead, when
+/// that is quicker than turning round (a bedroom cramped by its door).
+/// Both distances
+/// are fitted to the rooms: at the approach the body must be in this
+/// room, and beyond, in the next, whose depth across the door is
+/// `next_depth_m` when the plan gives it.
 fn door_pass(
-    gains: &GainSchedule,
-    pose: &Pose2,
+    config: &ExecutiveConfig,
+    est: &Estimate,
     d: &DoorEstimate,
-    room_m: [f64; 2],
-    approach_beyond_m: [f64; 2],
+    [approach_m, beyond_m]: [f64; 2],
+    next_depth_m: Option<f64>,
     speed_mps: f64,
 ) -> Vec<Behaviour> {
-    let g = WallGeometry::of(d.wall, room_m);
-    let heading = (-g.inward.y).atan2(-g.inward.x);
-    let a = g.point(d.position_m, approach_beyond_m[0]);
-    let b = g.point(d.position_m, -approach_beyond_m[1]);
-    let mut out = go_to(gains, pose, &Pose2::new(a.x, a.y, heading), speed_mps);
-    out.push(Behaviour::regulate(
-        gains,
-        Pose2::new(b.x, b.y, heading),
-        speed_mps,
-    ));
+    let v = &config.vehicle;
+    let (rear, front) = (v.rear_overhang_m, v.length_m - v.rear_overhang_m);
+    let g = WallGeometry::of(d.wall, est.room_m);
+    let depth = if g.along.x.abs() > 0.5 {
+        est.room_m[1]
+    } else {
+        est.room_m[0]
+    };
+    let out_heading = (-g.inward.y).atan2(-g.inward.x);
+    // Already on the door's line, facing along the passage, the robot
+    // needs no approach from further in than where it stands.
+    let here = est.pose.position().coords;
+    let (off_line, standing) = (g.position(&here) - d.position_m, g.distance(&here));
+    let pass = |forward: bool| {
+        // The end of the body that leads and the one that trails.
+        let (leads, trails) = if forward {
+            (front, rear)
+        } else {
+            (rear, front)
+        };
+        let heading = if forward {
+            out_heading
+        } else {
+            wrap_angle(out_heading + std::f64::consts::PI)
+        };
+        let on_line = off_line.abs() < ON_LINE_M
+            && wrap_angle(est.pose.theta - heading).abs() < ON_LINE_RAD
+            && standing > 0.0;
+        let mut approach = approach_m.min(depth - trails - DOOR_FIT_M);
+        if on_line {
+            approach = approach.min(standing);
+        }
+        let beyond = next_depth_m.map_or(beyond_m, |n| beyond_m.min(n - leads - DOOR_FIT_M));
+        let (a, b) = (
+            g.point(d.position_m, approach),
+            g.point(d.position_m, -beyond),
+        );
+        (
+            on_line,
+            Pose2::new(a.x, a.y, heading),
+            Pose2::new(b.x, b.y, heading),
+        )
+    };
+    let through = |forward: bool, b: Pose2| {
+        if forward {
+            Behaviour::regulate(&config.gains, b, speed_mps)
+        } else {
+            Behaviour::reverse_to(&config.gains, b, speed_mps)
+        }
+    };
+    // Facing out, or backing out the way it came in when it stands on the
+    // door's line facing into the room (the laser looks ahead: the robot
+    // backs only where it has just driven), whichever is the quicker.
+    let best = [true, false]
+        .into_iter()
+        .filter_map(|forward| {
+            let (on_line, a, b) = pass(forward);
+            if !forward && !on_line {
+                return None;
+            }
+            let (cost, way) = planned_way(config, est, &est.pose, &a, speed_mps)?;
+            Some((cost, forward, way, b))
+        })
+        .min_by(|x, y| x.0.total_cmp(&y.0));
+    if let Some((_, forward, mut out, b)) = best {
+        out.push(through(forward, b));
+        return out;
+    }
+    let (_, a, b) = pass(true);
+    let mut out = go_to(&config.gains, &est.pose, &a, speed_mps);
+    out.push(through(true, b));
     out
 }
 
 /// [`door_pass`] through door `door` of the floor plan, as the robot knows
 /// it in its room.
 fn plan_door_pass(
-    gains: &GainSchedule,
+    config: &ExecutiveConfig,
     est: &Estimate,
     door: usize,
     approach_beyond_m: [f64; 2],
@@ -2373,13 +2487,70 @@ fn plan_door_pass(
         .find(|d| d.plan_door == Some(door))
         .ok_or_else(|| format!("go_to_room: door {door} of the plan is not known in this room"))?;
     Ok(door_pass(
-        gains,
-        &est.pose,
+        config,
+        est,
         d,
-        est.room_m,
         approach_beyond_m,
+        next_room_depth(config, est, door),
         speed_mps,
     ))
+}
+
+/// The depth across door `door` of the plan of the room beyond it from
+/// the robot's room, m.
+fn next_room_depth(config: &ExecutiveConfig, est: &Estimate, door: usize) -> Option<f64> {
+    let floor = config.floor.as_ref()?;
+    let next = floor.beyond(door, est.room?)?;
+    let side = floor.side(door, next)?;
+    let size = floor.rooms().get(next)?.size_m;
+    Some(match side.wall {
+        WallName::South | WallName::North => size[1],
+        WallName::East | WallName::West => size[0],
+    })
+}
+
+/// The way from `from` to `goal` in the room `est` knows: the plain one
+/// (turn toward the goal, drive, turn to its heading) when the body and
+/// the supervisor's field keep clear of the walls, the doorways and what
+/// stands on the floor all along it; else the manoeuvre in partial turns
+/// and short runs that does; `None` when neither does. With it, the time
+/// it is reckoned to take, s.
+fn planned_way(
+    config: &ExecutiveConfig,
+    est: &Estimate,
+    from: &Pose2,
+    goal: &Pose2,
+    speed_mps: f64,
+) -> Option<(f64, Vec<Behaviour>)> {
+    let space = Space::new(
+        est.room_m,
+        &est.doors,
+        &est.obstacles,
+        &config.vehicle,
+        &config.safety,
+        speed_mps,
+    );
+    if let Some(cost) = space.direct_cost(from, goal) {
+        return Some((cost, go_to(&config.gains, from, goal, speed_mps)));
+    }
+    let (cost, moves) = space.manoeuvre(from, goal)?;
+    Some((
+        cost,
+        manoeuvre::behaviours(&config.gains, &moves, speed_mps),
+    ))
+}
+
+/// [`planned_way`], or failing that the plain way, the supervisor
+/// stopping the robot before it touches anything.
+fn way(
+    config: &ExecutiveConfig,
+    est: &Estimate,
+    from: &Pose2,
+    goal: &Pose2,
+    speed_mps: f64,
+) -> Vec<Behaviour> {
+    planned_way(config, est, from, goal, speed_mps)
+        .map_or_else(|| go_to(&config.gains, from, goal, speed_mps), |(_, w)| w)
 }
 
 /// The frame of `landmark` in the room as `est` knows it: facing it from

@@ -32,6 +32,7 @@
 mod behaviour;
 mod executive;
 mod floor;
+mod manoeuvre;
 mod model;
 mod plaster;
 mod route;

@@ -87,21 +87,7 @@ impl<'a> Floor<'a> {
         let (back, ahead) = (s.min(0.0) - self.rear_m, s.max(0.0) + self.front_m);
         let c = a + f * (0.5 * (back + ahead)) + n * (0.5 * l);
         let (hl, hw) = (0.5 * (ahead - back), self.half_width_m + 0.5 * l.abs());
-        self.obstacles.iter().all(|o| {
-            let bc = Vector2::new(
-                0.5 * (o.min_m[0] + o.max_m[0]),
-                0.5 * (o.min_m[1] + o.max_m[1]),
-            );
-            let bh = Vector2::new(
-                0.5 * (o.max_m[0] - o.min_m[0]) + MARGIN_M,
-                0.5 * (o.max_m[1] - o.min_m[1]) + MARGIN_M,
-            );
-            let d = c - bc;
-            d.x.abs() > hl * f.x.abs() + hw * n.x.abs() + bh.x
-                || d.y.abs() > hl * f.y.abs() + hw * n.y.abs() + bh.y
-                || f.dot(&d).abs() > hl + bh.x * f.x.abs() + bh.y * f.y.abs()
-                || n.dot(&d).abs() > hw + bh.x * n.x.abs() + bh.y * n.y.abs()
-        })
+        rect_clear(self.obstacles, &c, &f, [hl, hw], MARGIN_M)
     }
 
     /// True when nothing on the floor stands within the turning clearance
@@ -171,6 +157,34 @@ impl<'a> Floor<'a> {
         }
         None
     }
+}
+
+/// True when the rectangle centred at `c`, its long axis along the unit
+/// vector `f` and its half sizes `[along, across]`, keeps `margin_m` from
+/// every obstacle (separating axes).
+pub(crate) fn rect_clear(
+    obstacles: &[Obstacle],
+    c: &Vector2<f64>,
+    f: &Vector2<f64>,
+    [hl, hw]: [f64; 2],
+    margin_m: f64,
+) -> bool {
+    let n = Vector2::new(-f.y, f.x);
+    obstacles.iter().all(|o| {
+        let bc = Vector2::new(
+            0.5 * (o.min_m[0] + o.max_m[0]),
+            0.5 * (o.min_m[1] + o.max_m[1]),
+        );
+        let bh = Vector2::new(
+            0.5 * (o.max_m[0] - o.min_m[0]) + margin_m,
+            0.5 * (o.max_m[1] - o.min_m[1]) + margin_m,
+        );
+        let d = c - bc;
+        d.x.abs() > hl * f.x.abs() + hw * n.x.abs() + bh.x
+            || d.y.abs() > hl * f.y.abs() + hw * n.y.abs() + bh.y
+            || f.dot(&d).abs() > hl + bh.x * f.x.abs() + bh.y * f.y.abs()
+            || n.dot(&d).abs() > hw + bh.x * n.x.abs() + bh.y * n.y.abs()
+    })
 }
 
 /// The behaviours from `from` to `goal` (both places the robot can turn

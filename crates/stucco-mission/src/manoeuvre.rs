@@ -1,0 +1,597 @@
+//! Manoeuvres where the robot cannot turn on the spot.
+//!
+//! The tricycle turns about the middle of its rear axle and its front
+//! corners sweep a circle of 0.81 m radius: in a 1.2 m hall, or in a
+//! doorway with a chair beyond it, a turn on the spot would put the front
+//! into a wall. A driver turns a car in a narrow street in several moves;
+//! the robot does the same with partial turns on the spot and short
+//! straight runs, forward or backing, between them. [`Space::manoeuvre`]
+//! finds such moves by an A* search over the pose.
+//!
+//! Every pose along every move keeps the body inside the room (or a
+//! doorway of it) and off what stands on the floor, with the supervisor's
+//! protective field around it: its sides grown by the lateral margin, and
+//! the body carried on past the end of each move by the field's length,
+//! so that the supervisor never stops a manoeuvre planned here (the field
+//! does not know where a move ends).
+
+use crate::behaviour::Behaviour;
+use crate::model::{DoorEstimate, WallGeometry};
+use crate::route::rect_clear;
+use crate::supervisor::SafetyConfig;
+use nalgebra::{Rotation2, Vector2};
+use std::collections::{BTreeMap, BTreeSet};
+use stucco_control::GainSchedule;
+use stucco_core::{Pose2, VehicleSpec, wrap_angle};
+use stucco_plan::Obstacle;
+
+/// Room kept between the field and the walls for the motion's own
+/// error (estimate and tracking), m.
+const PLAN_MARGIN_M: f64 = 0.02;
+/// Room kept between the field and what stands on the floor, whose place
+/// the map knows less well than the walls', m.
+const OBSTACLE_MARGIN_M: f64 = 0.02;
+/// How far a doorway's free space reaches beyond its wall, m.
+const DOORWAY_DEPTH_M: f64 = 1.5;
+/// The grid the search tells poses apart on: position, m, and heading.
+const CELL_M: f64 = 0.03;
+const CELL_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
+/// The largest turn whose way round is sure, rad.
+const MAX_TURN_RAD: f64 = 170.0 * std::f64::consts::PI / 180.0;
+/// Poses along a turn are checked this often, rad, and along a run, m.
+const TURN_STEP_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+const RUN_STEP_M: f64 = 0.02;
+/// Turns and runs the search tries, deg and m (each either way).
+const TURNS_DEG: [f64; 6] = [5.0, 10.0, 20.0, 30.0, 45.0, 90.0];
+const RUNS_M: [f64; 7] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2];
+/// Poses the search may expand before it gives up.
+const BUDGET: usize = 100_000;
+/// How much the search's estimate of the time still to go is inflated.
+const GREED: f64 = 1.5;
+/// A goal this near needs no run, m, and this near in heading no turn, rad.
+const AT_GOAL_M: f64 = 0.01;
+const AT_GOAL_RAD: f64 = 0.01;
+
+/// One move of a manoeuvre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Move {
+    /// A turn on the spot to this heading, rad.
+    Turn(f64),
+    /// A straight run to this pose (the heading the run's), forward or
+    /// backing.
+    Run { to: Pose2, forward: bool },
+}
+
+/// A door's free space beyond its wall: along the wall between two
+/// positions, from the wall's line out to [`DOORWAY_DEPTH_M`].
+#[derive(Clone, Copy, Debug)]
+struct Doorway {
+    wall: WallGeometry,
+    from_m: f64,
+    to_m: f64,
+}
+
+impl Doorway {
+    fn contains(&self, p: &Vector2<f64>) -> bool {
+        let (at, d) = (self.wall.position(p), self.wall.distance(p));
+        (self.from_m..=self.to_m).contains(&at) && (-DOORWAY_DEPTH_M..=0.05).contains(&d)
+    }
+}
+
+/// Where a manoeuvre may go: the room, its doorways, what stands on the
+/// floor, and the body with its protective field.
+#[derive(Clone, Debug)]
+pub(crate) struct Space<'a> {
+    room_m: [f64; 2],
+    obstacles: &'a [Obstacle],
+    doorways: Vec<Doorway>,
+    /// The body's rectangle in its own frame, field and margins included:
+    /// behind the rear axle, ahead of it, and half its width, m.
+    rear_m: f64,
+    front_m: f64,
+    half_width_m: f64,
+    /// How far the field reaches past the end of a run, m, and of a turn,
+    /// rad.
+    run_field_m: f64,
+    turn_field_rad: f64,
+    /// Time costs of the search: the speed of a run, m/s, the rate of a
+    /// turn, rad/s, and the time a turn's wheel takes to swing across and
+    /// back, s.
+    speed_mps: f64,
+    turn_radps: f64,
+    turn_overhead_s: f64,
+}
+
+impl<'a> Space<'a> {
+    /// The room `room_m` with its `doors` and `obstacles`, for `vehicle`
+    /// under the supervisor's `safety` field, driven at `speed_mps`.
+    pub fn new(
+        room_m: [f64; 2],
+        doors: &[DoorEstimate],
+        obstacles: &'a [Obstacle],
+        vehicle: &VehicleSpec,
+        safety: &SafetyConfig,
+        speed_mps: f64,
+    ) -> Self {
+        let doorways = doors
+            .iter()
+            .map(|d| {
+                let half = 0.5 * d.width_m.unwrap_or(vehicle.width_m + 0.1);
+                Doorway {
+                    wall: WallGeometry::of(d.wall, room_m),
+                    from_m: d.position_m - half,
+                    to_m: d.position_m + half,
+                }
+            })
+            .collect();
+        // The field's length past a move's end: its margin, and what the
+        // slowest speed a move ends at adds to it (the laws slow down to
+        // a twentieth near the goal; a turn's wheel to 0.05 rad/s).
+        let creep = 0.05 * vehicle.wheelbase_m;
+        let field =
+            safety.obstacle_margin_m + creep * creep / (2.0 * safety.stop_decel_mps2) + 0.1 * creep;
+        Space {
+            room_m,
+            obstacles,
+            doorways,
+            rear_m: vehicle.rear_overhang_m + PLAN_MARGIN_M,
+            front_m: vehicle.length_m - vehicle.rear_overhang_m + PLAN_MARGIN_M,
+            half_width_m: 0.5 * vehicle.width_m + safety.lateral_margin_m + PLAN_MARGIN_M,
+            run_field_m: field + PLAN_MARGIN_M,
+            turn_field_rad: (field + PLAN_MARGIN_M) / vehicle.wheelbase_m,
+            speed_mps: speed_mps.max(0.05),
+            turn_radps: 0.5,
+            turn_overhead_s: 2.0 * (vehicle.max_steer_rad / vehicle.max_steer_rate_radps + 0.1),
+        }
+    }
+
+    fn free_point(&self, p: &Vector2<f64>) -> bool {
+        let [xs, ys] = self.room_m;
+        ((0.0..=xs).contains(&p.x) && (0.0..=ys).contains(&p.y))
+            || self.doorways.iter().any(|d| d.contains(p))
+    }
+
+    /// True when the body (with its field's sides) at `p` heading `theta`
+    /// is inside the room or its doorways and off every obstacle.
+    fn body_clear(&self, p: &Vector2<f64>, theta: f64) -> bool {
+        let r = Rotation2::new(theta);
+        let (back, ahead, half) = (-self.rear_m, self.front_m, self.half_width_m);
+        let corners = [
+            Vector2::new(back, -half),
+            Vector2::new(ahead, -half),
+            Vector2::new(ahead, half),
+            Vector2::new(back, half),
+        ]
+        .map(|c| p + r * c);
+        let [xs, ys] = self.room_m;
+        let inside = corners
+            .iter()
+            .all(|c| (0.0..=xs).contains(&c.x) && (0.0..=ys).contains(&c.y));
+        // Inside the (convex) room, the corners tell; reaching into a
+        // doorway, the outline is walked.
+        let walls_clear = inside
+            || (!self.doorways.is_empty()
+                && (0..4).all(|i| {
+                    let (a, b) = (corners[i], corners[(i + 1) % 4]);
+                    let n = ((b - a).norm() / RUN_STEP_M).ceil().max(1.0) as usize;
+                    (0..n).all(|k| self.free_point(&(a + (b - a) * (k as f64 / n as f64))))
+                }));
+        walls_clear && {
+            let f = Vector2::new(theta.cos(), theta.sin());
+            let c = p + f * (0.5 * (ahead + back));
+            rect_clear(
+                self.obstacles,
+                &c,
+                &f,
+                [0.5 * (ahead - back), half],
+                OBSTACLE_MARGIN_M,
+            )
+        }
+    }
+
+    /// True when a turn on the spot at `p` from `from` to `to` (the short
+    /// way round) and the field past its end keep the body clear. A turn
+    /// of nearly half round must be clear both ways round: which way the
+    /// robot takes it hangs on a hair of its heading then.
+    fn turn_clear(&self, p: &Vector2<f64>, from: f64, to: f64) -> bool {
+        let delta = wrap_angle(to - from);
+        let sweep = |delta: f64| {
+            let reach = delta.abs() + self.turn_field_rad;
+            let n = (reach / TURN_STEP_RAD).ceil().max(1.0) as usize;
+            (0..=n).all(|k| self.body_clear(p, from + delta.signum() * reach * k as f64 / n as f64))
+        };
+        sweep(delta)
+            && (delta.abs() <= MAX_TURN_RAD || sweep(delta - std::f64::consts::TAU.copysign(delta)))
+    }
+
+    /// True when a straight run heading `theta` from `a` to `b` (forward
+    /// when `b` lies ahead) and the field past its end keep the body
+    /// clear.
+    fn run_clear(&self, a: &Vector2<f64>, b: &Vector2<f64>, theta: f64) -> bool {
+        let d = b - a;
+        let Some(dir) = d.try_normalize(1e-9) else {
+            return self.body_clear(a, theta);
+        };
+        let end = b + dir * self.run_field_m;
+        let n = ((end - a).norm() / RUN_STEP_M).ceil().max(1.0) as usize;
+        (0..=n).all(|k| self.body_clear(&(a + (end - a) * (k as f64 / n as f64)), theta))
+    }
+
+    /// True when every move from `from` keeps the body clear.
+    pub fn moves_clear(&self, from: &Pose2, moves: &[Move]) -> bool {
+        let (mut p, mut theta) = (from.position().coords, from.theta);
+        for m in moves {
+            match *m {
+                Move::Turn(h) => {
+                    if !self.turn_clear(&p, theta, h) {
+                        return false;
+                    }
+                    theta = h;
+                }
+                Move::Run { to, .. } => {
+                    let q = to.position().coords;
+                    if !self.run_clear(&p, &q, theta) {
+                        return false;
+                    }
+                    p = q;
+                }
+            }
+        }
+        true
+    }
+
+    /// The moves of a turn toward (or away from, `forward` false) the
+    /// goal, a run to it, and a turn to its heading.
+    fn direct(from: &Pose2, goal: &Pose2, forward: bool) -> Vec<Move> {
+        let d = goal.position() - from.position();
+        let mut out = Vec::new();
+        let mut theta = from.theta;
+        if d.norm() > AT_GOAL_M {
+            let face = d.y.atan2(d.x) + if forward { 0.0 } else { std::f64::consts::PI };
+            let face = wrap_angle(face);
+            if wrap_angle(face - theta).abs() > AT_GOAL_RAD {
+                out.push(Move::Turn(face));
+            }
+            theta = face;
+            out.push(Move::Run {
+                to: Pose2::new(goal.x, goal.y, face),
+                forward,
+            });
+        }
+        if wrap_angle(goal.theta - theta).abs() > AT_GOAL_RAD {
+            out.push(Move::Turn(goal.theta));
+        }
+        out
+    }
+
+    /// The time the plain way — turn to face the goal, drive to it, turn
+    /// to its heading — takes when it keeps the body clear, s.
+    pub fn direct_cost(&self, from: &Pose2, goal: &Pose2) -> Option<f64> {
+        let moves = Self::direct(from, goal, true);
+        self.moves_clear(from, &moves)
+            .then(|| self.cost(from, &moves))
+    }
+
+    fn cost(&self, from: &Pose2, moves: &[Move]) -> f64 {
+        let mut theta = from.theta;
+        let mut p = from.position().coords;
+        moves
+            .iter()
+            .map(|m| match *m {
+                Move::Turn(h) => {
+                    let c = self.turn_overhead_s + wrap_angle(h - theta).abs() / self.turn_radps;
+                    theta = h;
+                    c
+                }
+                Move::Run { to, .. } => {
+                    let q = to.position().coords;
+                    let c = 0.5 + (q - p).norm() / self.speed_mps;
+                    p = q;
+                    c
+                }
+            })
+            .sum()
+    }
+
+    /// The quickest way found from `from` to `goal` in partial turns and
+    /// straight runs, every pose along it clear, and the time it takes,
+    /// s; `None` when the search finds none within its budget (or `from`
+    /// itself is not clear).
+    pub fn manoeuvre(&self, from: &Pose2, goal: &Pose2) -> Option<(f64, Vec<Move>)> {
+        if !self.body_clear(&from.position().coords, from.theta)
+            || !self.body_clear(&goal.position().coords, goal.theta)
+        {
+            return None;
+        }
+        // The time of the run and the turn still needed, inflated: the
+        // search is greedier and its way at most that much dearer than
+        // the best.
+        let heuristic = |p: &Pose2| {
+            let turn = wrap_angle(goal.theta - p.theta).abs();
+            let overhead = if turn > AT_GOAL_RAD {
+                self.turn_overhead_s
+            } else {
+                0.0
+            };
+            GREED
+                * ((goal.position() - p.position()).norm() / self.speed_mps
+                    + turn / self.turn_radps
+                    + overhead)
+        };
+        let key = |p: &Pose2, turned: bool| {
+            (
+                (p.x / CELL_M).round() as i64,
+                (p.y / CELL_M).round() as i64,
+                (wrap_angle(p.theta) / CELL_RAD).round() as i64,
+                turned,
+            )
+        };
+        // Nodes: pose, cost so far, the node before and the move from it,
+        // whether the move was a turn (turns and runs alternate).
+        struct Node {
+            pose: Pose2,
+            cost: f64,
+            parent: Option<(usize, Move)>,
+            turned: Option<bool>,
+        }
+        let mut nodes = vec![Node {
+            pose: *from,
+            cost: 0.0,
+            parent: None,
+            turned: None,
+        }];
+        let mut best: BTreeMap<(i64, i64, i64, bool), f64> = BTreeMap::new();
+        let mut open = BTreeSet::new();
+        open.insert((heuristic(from).to_bits(), 0usize));
+        let mut found: Option<(f64, usize, Vec<Move>)> = None;
+        let mut expanded = 0;
+        while let Some((f, k)) = open.pop_first() {
+            if found
+                .as_ref()
+                .is_some_and(|(c, ..)| f64::from_bits(f) >= *c)
+            {
+                break;
+            }
+            expanded += 1;
+            if expanded > BUDGET {
+                break;
+            }
+            let (pose, cost, turned) = (nodes[k].pose, nodes[k].cost, nodes[k].turned);
+            // The last moves straight onto the goal, forward or backing.
+            for forward in [true, false] {
+                let shot = Self::direct(&pose, goal, forward);
+                let total = cost + self.cost(&pose, &shot);
+                if found.as_ref().is_none_or(|(c, ..)| total < *c) && self.moves_clear(&pose, &shot)
+                {
+                    found = Some((total, k, shot));
+                }
+            }
+            let p = pose.position().coords;
+            let mut next = Vec::new();
+            if turned != Some(true) {
+                for deg in TURNS_DEG {
+                    for sign in [1.0, -1.0] {
+                        let h = wrap_angle(pose.theta + sign * deg.to_radians());
+                        if self.turn_clear(&p, pose.theta, h) {
+                            next.push((Move::Turn(h), Pose2::new(p.x, p.y, h), true));
+                        }
+                    }
+                }
+            }
+            if turned != Some(false) {
+                let f = Vector2::new(pose.theta.cos(), pose.theta.sin());
+                for forward in [true, false] {
+                    let sign = if forward { 1.0 } else { -1.0 };
+                    for run in RUNS_M {
+                        let q = p + f * (sign * run);
+                        if !self.run_clear(&p, &q, pose.theta) {
+                            break;
+                        }
+                        let to = Pose2::new(q.x, q.y, pose.theta);
+                        next.push((Move::Run { to, forward }, to, false));
+                    }
+                }
+            }
+            for (m, to, is_turn) in next {
+                let c = cost + self.cost(&pose, &[m]);
+                let kk = key(&to, is_turn);
+                if best.get(&kk).is_some_and(|b| *b <= c) {
+                    continue;
+                }
+                best.insert(kk, c);
+                nodes.push(Node {
+                    pose: to,
+                    cost: c,
+                    parent: Some((k, m)),
+                    turned: Some(is_turn),
+                });
+                open.insert(((c + heuristic(&to)).to_bits(), nodes.len() - 1));
+            }
+        }
+        let (cost, mut k, shot) = found?;
+        let mut moves = Vec::new();
+        while let Some((parent, m)) = nodes[k].parent {
+            moves.push(m);
+            k = parent;
+        }
+        moves.reverse();
+        moves.extend(shot);
+        Some((cost, merged(from.theta, moves)))
+    }
+}
+
+/// The behaviours that drive `moves` at `speed_mps`.
+pub(crate) fn behaviours(gains: &GainSchedule, moves: &[Move], speed_mps: f64) -> Vec<Behaviour> {
+    moves
+        .iter()
+        .map(|m| match *m {
+            Move::Turn(h) => Behaviour::pivot(h),
+            Move::Run { to, forward: true } => Behaviour::regulate(gains, to, speed_mps),
+            Move::Run { to, forward: false } => Behaviour::reverse_to(gains, to, speed_mps),
+        })
+        .collect()
+}
+
+/// Moves one after the other of a kind made one: two runs the same way,
+/// two turns the same way round (within the largest turn), for a robot
+/// heading `theta` before them.
+fn merged(mut theta: f64, moves: Vec<Move>) -> Vec<Move> {
+    let mut out: Vec<Move> = Vec::with_capacity(moves.len());
+    // The heading before the last move kept.
+    let mut before = theta;
+    for m in moves {
+        match (out.last_mut(), m) {
+            (Some(Move::Run { to, forward }), Move::Run { to: t, forward: f })
+                if *forward == f && wrap_angle(to.theta - t.theta).abs() < 1e-9 =>
+            {
+                *to = t;
+                continue;
+            }
+            (Some(Move::Turn(h)), Move::Turn(next)) => {
+                let (first, second) = (wrap_angle(*h - before), wrap_angle(next - *h));
+                let whole = wrap_angle(next - before);
+                if first * second >= 0.0 && whole.abs() <= MAX_TURN_RAD {
+                    *h = next;
+                    theta = next;
+                    continue;
+                }
+            }
+            _ => {}
+        }
+        before = theta;
+        if let Move::Turn(h) = m {
+            theta = h;
+        }
+        out.push(m);
+    }
+    out
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+    use crate::task::WallName;
+
+    fn demo_safety() -> SafetyConfig {
+        SafetyConfig {
+            obstacle_margin_m: 0.05,
+            lateral_margin_m: 0.05,
+            ..SafetyConfig::default()
+        }
+    }
+
+    /// Every pose of the way, sampled finely, with the body inside the
+    /// room or a doorway: what a test checks a manoeuvre by.
+    fn assert_way_clear(space: &Space, from: &Pose2, moves: &[Move], goal: &Pose2) {
+        assert!(space.moves_clear(from, moves), "{moves:?}");
+        let (mut p, mut theta) = (from.position().coords, from.theta);
+        for m in moves {
+            match *m {
+                Move::Turn(h) => theta = h,
+                Move::Run { to, forward } => {
+                    let ahead =
+                        Vector2::new(theta.cos(), theta.sin()).dot(&(to.position().coords - p));
+                    assert_eq!(ahead > 0.0, forward, "a run's direction");
+                    assert!(
+                        wrap_angle(to.theta - theta).abs() < 1e-9,
+                        "a run keeps its heading"
+                    );
+                    p = to.position().coords;
+                }
+            }
+        }
+        assert!((p - goal.position().coords).norm() < 1e-9);
+        assert!(wrap_angle(theta - goal.theta).abs() <= AT_GOAL_RAD);
+    }
+
+    #[test]
+    fn a_hall_too_narrow_to_turn_in_is_turned_in_several_moves() {
+        // The apartment's hall: 8 × 1.2 m, doors in its south wall at 3.55
+        // and 6.6 m, in its north wall at 3.4 m. The robot has come in
+        // through the south door heading north, its axle 0.25 m in.
+        let v = VehicleSpec::default();
+        let doors = [
+            DoorEstimate {
+                wall: WallName::South,
+                position_m: 3.55,
+                width_m: Some(0.9),
+                sigma_m: 0.01,
+                plan_door: None,
+            },
+            DoorEstimate {
+                wall: WallName::South,
+                position_m: 6.6,
+                width_m: Some(0.8),
+                sigma_m: 0.01,
+                plan_door: None,
+            },
+        ];
+        let space = Space::new([8.0, 1.2], &doors, &[], &v, &demo_safety(), 0.3);
+        let from = Pose2::new(3.55, 0.25, std::f64::consts::FRAC_PI_2);
+        // A turn on the spot there would put the front through the north
+        // wall.
+        let east = Pose2::new(5.0, 0.6, 0.0);
+        assert!(space.direct_cost(&from, &east).is_none());
+        // Before the other south door, facing it, axle 0.9 m from it.
+        let goal = Pose2::new(6.6, 0.9, -std::f64::consts::FRAC_PI_2);
+        let moves = space
+            .manoeuvre(&from, &goal)
+            .expect("a way through the hall")
+            .1;
+        assert_way_clear(&space, &from, &moves, &goal);
+        let turns = moves.iter().filter(|m| matches!(m, Move::Turn(_))).count();
+        assert!(turns >= 3, "{moves:?}");
+        println!("{} moves: {moves:?}", moves.len());
+    }
+
+    #[test]
+    fn a_room_wide_enough_gets_the_plain_way() {
+        let v = VehicleSpec::default();
+        let space = Space::new([5.0, 4.0], &[], &[], &v, &demo_safety(), 0.3);
+        let from = Pose2::new(2.0, 2.0, 0.0);
+        let goal = Pose2::new(3.0, 2.0, 1.0);
+        assert!(space.direct_cost(&from, &goal).is_some());
+        let moves = space.manoeuvre(&from, &goal).unwrap().1;
+        assert_eq!(moves, Space::direct(&from, &goal, true));
+    }
+
+    #[test]
+    fn no_way_out_of_a_box_the_body_does_not_fit() {
+        let v = VehicleSpec::default();
+        // 1.0 m wide: the body with its field's sides fits heading along
+        // it, but no heading across it fits.
+        let space = Space::new([6.0, 1.0], &[], &[], &v, &demo_safety(), 0.3);
+        let from = Pose2::new(2.0, 0.5, 0.0);
+        let back = Pose2::new(4.0, 0.5, std::f64::consts::PI);
+        assert!(space.manoeuvre(&from, &back).is_none());
+        // Along it, it goes.
+        let on = Pose2::new(4.0, 0.5, 0.0);
+        assert!(space.manoeuvre(&from, &on).is_some());
+    }
+
+    #[test]
+    fn a_chair_beyond_a_doorway_is_kept_off() {
+        // The bedroom: the robot has come in heading north through the
+        // door at 3.4 m, a chair 0.8 m ahead and to its left.
+        let v = VehicleSpec::default();
+        let doors = [DoorEstimate {
+            wall: WallName::South,
+            position_m: 3.4,
+            width_m: Some(0.8),
+            sigma_m: 0.01,
+            plan_door: None,
+        }];
+        let chair = [Obstacle {
+            min_m: [2.29, 1.04],
+            max_m: [2.71, 1.46],
+            height_m: 0.45,
+        }];
+        let space = Space::new([4.0, 3.65], &doors, &chair, &v, &demo_safety(), 0.3);
+        let from = Pose2::new(3.4, 0.2, std::f64::consts::FRAC_PI_2);
+        // Back out through the door: facing it from 0.8 m in.
+        let goal = Pose2::new(3.4, 0.8, -std::f64::consts::FRAC_PI_2);
+        let moves = space.manoeuvre(&from, &goal).expect("a way round").1;
+        assert_way_clear(&space, &from, &moves, &goal);
+    }
+}
