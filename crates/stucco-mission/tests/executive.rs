@@ -1431,3 +1431,120 @@ fn a_hold_is_told_and_cleared_while_the_mission_stands() {
     assert_eq!(kinds(&out.events), ["safety_clear"]);
     assert_eq!(exec.mode(), &MissionMode::Done);
 }
+
+/// The apartment's drawing (missions/plans/apartment.toml): a hall 1.2 m
+/// wide with the living room and the kitchen to its south, the bedroom to
+/// its north.
+fn apartment() -> FloorPlan {
+    let room = |name: &str, origin_m, size_m| PlanRoom {
+        name: name.to_owned(),
+        origin_m,
+        size_m,
+    };
+    let door = |a: &str, b: &str, at_m, width_m| PlanDoor {
+        rooms: [a.to_owned(), b.to_owned()],
+        at_m,
+        width_m,
+    };
+    FloorPlan::new(
+        vec![
+            room("living", [0.0, 0.0], [5.0, 2.85]),
+            room("kitchen", [5.15, 0.0], [2.85, 2.85]),
+            room("hall", [0.0, 3.0], [8.0, 1.2]),
+            room("bedroom", [0.0, 4.35], [4.0, 3.65]),
+        ],
+        vec![
+            door("living", "hall", [3.55, 2.925], 0.9),
+            door("kitchen", "hall", [6.6, 2.925], 0.8),
+            door("hall", "bedroom", [3.4, 4.275], 0.8),
+        ],
+    )
+    .unwrap()
+}
+
+/// How far the body's corners keep inside the rooms of `plan`, m
+/// (negative: into a wall); a corner in a door's gap through a wall is
+/// not counted. The room frames
+/// lie on the drawing's axes, their origins at the rooms' south-west
+/// corners.
+fn body_inside(robot: &Robot, plan: &FloorPlan) -> f64 {
+    let origin = plan.rooms()[robot.room.unwrap()].origin_m;
+    let s = &robot.spec;
+    let front = s.length_m - s.rear_overhang_m;
+    let half = 0.5 * s.width_m;
+    let corners = [
+        (-s.rear_overhang_m, -half),
+        (-s.rear_overhang_m, half),
+        (front, -half),
+        (front, half),
+    ];
+    let room_depth = |r: &PlanRoom, p: [f64; 2]| {
+        (p[0] - r.origin_m[0])
+            .min(r.origin_m[0] + r.size_m[0] - p[0])
+            .min(p[1] - r.origin_m[1])
+            .min(r.origin_m[1] + r.size_m[1] - p[1])
+    };
+    corners
+        .iter()
+        .map(|&(x, y)| {
+            let c = robot.pose.transform_point(&Point2::new(x, y));
+            let p = [c.x + origin[0], c.y + origin[1]];
+            let in_gap = plan.doors().iter().any(|d| {
+                // The doors of this plan are in walls along x.
+                (p[0] - d.at_m[0]).abs() <= 0.5 * d.width_m && (p[1] - d.at_m[1]).abs() <= 0.1
+            });
+            let depth = plan
+                .rooms()
+                .iter()
+                .map(|r| room_depth(r, p))
+                .fold(f64::NEG_INFINITY, f64::max);
+            if in_gap { f64::INFINITY } else { depth }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn the_robot_turns_in_a_hall_too_narrow_to_turn_on_the_spot_in() {
+    // Its front sweeps 0.81 m about the rear axle; the hall is 1.2 m
+    // wide. Living room → kitchen → bedroom → living room, every door
+    // through the hall.
+    let plan = apartment();
+    let mut robot = Robot::at(Pose2::new(1.7, 1.0, 0.0));
+    robot.in_room(&plan, 0);
+    let mut cfg = config(true);
+    cfg.floor = Some(plan.clone());
+    cfg.safety.obstacle_margin_m = 0.03;
+    cfg.safety.lateral_margin_m = 0.02;
+    let tasks = ["kitchen", "bedroom", "living"]
+        .iter()
+        .map(|r| TaskSpec::GoToRoom {
+            room: (*r).to_owned(),
+            approach_m: 1.0,
+            beyond_m: 0.5,
+            speed_mps: 0.3,
+        })
+        .collect();
+    let mut exec = Executive::new(cfg, tasks);
+    let mut doors = Vec::new();
+    let mut closest = f64::INFINITY;
+    for _ in 0..(900.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        if let Some(door) = out.enter_room {
+            doors.push(door);
+            robot.through(&plan, door);
+        }
+        robot.drive(out.drive);
+        closest = closest.min(body_inside(&robot, &plan));
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    assert_eq!(doors, [0, 1, 1, 2, 2, 0]);
+    assert_eq!(robot.room, Some(0));
+    // The body kept off every wall by a centimetre at least (the plan
+    // keeps the field's 2 cm sides and 2 cm more; the rest is the line
+    // law's tracking).
+    println!("closest to a wall: {closest:.3} m");
+    assert!(closest >= 0.01, "{closest}");
+}
