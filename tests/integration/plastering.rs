@@ -108,6 +108,14 @@ fn a_plastering_run_killed_and_resumed_sprays_nothing_twice() {
         .as_u64()
         .unwrap();
     assert!(station > 0, "{cp}");
+    // The window the camera found before the kill is kept: the resumed
+    // run does not drive the survey loop again.
+    assert!(
+        cp["map"]["windows"]
+            .as_array()
+            .is_some_and(|w| w.iter().any(|w| w[0] == "south")),
+        "{cp}"
+    );
     let resumed = run(dir.path(), true, None);
     assert_eq!(resumed.outcome, "done", "{:?}", resumed.reason);
     assert_eq!(resumed.first_task, 2);

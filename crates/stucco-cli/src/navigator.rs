@@ -646,6 +646,12 @@ impl Navigator {
         room_windows(&self.room)
     }
 
+    /// A window of `wall` in the room the robot is in, found before (a
+    /// checkpoint kept it).
+    pub fn add_known_window(&mut self, wall: WallName, window: Window) {
+        self.room.windows[wall.index()].know(window);
+    }
+
     /// The windows found in every room the robot has been in: the plan's
     /// name of the room (none without a plan: the one room), wall by wall.
     pub fn windows_by_room(&self) -> Vec<RoomWindows<'_>> {

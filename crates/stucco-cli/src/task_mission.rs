@@ -284,6 +284,9 @@ pub struct RoomMap {
     /// The floor plan's room it is, when the mission has a plan.
     #[serde(default)]
     pub room: Option<String>,
+    /// The windows the camera had found in it, wall by wall.
+    #[serde(default)]
+    pub windows: Vec<(WallName, stucco_nav::Window)>,
 }
 
 /// FNV-1a digest of a mission file's text.
@@ -644,6 +647,7 @@ fn run_once(
                     doors: est.doors.clone(),
                     pose: est.pose,
                     room: nav.room_name().map(str::to_owned),
+                    windows: nav.windows(),
                 },
                 sim_pose: nav.truth(),
             };
@@ -1186,6 +1190,9 @@ pub(crate) fn mission_navigator(
     // twice).
     for d in resume.iter().flat_map(|m| &m.doors) {
         nav.add_known_door(d);
+    }
+    for (wall, w) in resume.iter().flat_map(|m| &m.windows) {
+        nav.add_known_window(*wall, *w);
     }
     if let (Some(plan), Some(room)) = (mission.floor_plan(), mission_room(mission, resume)?) {
         // Scoring follows the robot into each room by its name.

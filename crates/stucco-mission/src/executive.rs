@@ -49,6 +49,10 @@ const MIN_RUN_IN_M: f64 = 1.5;
 /// m and rad.
 const ON_LINE_M: f64 = 0.03;
 const ON_LINE_RAD: f64 = 0.05;
+/// How far beyond a door's wall line a robot backing through it stops
+/// with its laser, m: through a wall's thickness and the laser's shortest
+/// range.
+const BACKED_LASER_BEYOND_M: f64 = 0.5;
 /// Seconds blocked on the way to a door before the way is planned again.
 const REPLAN_AFTER_S: f64 = 2.0;
 /// Times the way to one door may be planned again.
@@ -1192,7 +1196,7 @@ impl Executive {
             } else {
                 let k = run.cursor.station;
                 let floor = floor_of(&run, &self.config.vehicle, clearance);
-                queue.extend(station_way(gains, &floor, &run, k, &pose, speed_mps));
+                queue.extend(station_way(&self.config, &floor, &run, k, &pose, speed_mps));
             }
             self.emit(
                 now,
@@ -1621,7 +1625,7 @@ impl Executive {
                 });
                 run.replan(plan);
                 let floor = floor_of(run, &vehicle, clearance);
-                let way = station_way(&gains, &floor, run, 0, &est.pose, speed);
+                let way = station_way(&self.config, &floor, run, 0, &est.pose, speed);
                 a.queue.extend(way);
                 self.tool = park;
                 TaskStep::Drive(DriveCommand::STOP)
@@ -1799,7 +1803,7 @@ impl Executive {
                                 _ => None,
                             })
                             .unwrap_or(est.pose);
-                        way.extend(station_way(&gains, &floor, run, k, &from, speed));
+                        way.extend(station_way(&self.config, &floor, run, k, &from, speed));
                         run.phase = Phase::Moving;
                         a.queue.extend(way);
                         self.tool = park;
@@ -2094,7 +2098,7 @@ fn plan_room(
 /// on it already (forward or backing), else onto the lane where the robot
 /// can turn (`clearance` from every wall), and along it to the station.
 fn station_way(
-    gains: &GainSchedule,
+    config: &ExecutiveConfig,
     floor: &Floor,
     run: &PlasterRun,
     k: usize,
@@ -2104,6 +2108,7 @@ fn station_way(
     let (Some(station), Some((line, dist))) = (run.plan.stations.get(k), run.lane_line(k)) else {
         return Vec::new();
     };
+    let gains = &config.gains;
     let goal = station.base;
     let heading = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
     let p = from.position().coords;
@@ -2120,7 +2125,28 @@ fn station_way(
     let Some((entry, forward)) = lane_entry(floor, run, k) else {
         return Vec::new();
     };
-    let mut way = route(gains, floor, from, &entry, speed);
+    // A lane nearer its wall than a turn on the spot allows is entered
+    // on its own line, in the moves that get there: from the turning
+    // line, the run-in would end short of the lane and the robot would
+    // come back for the station.
+    let space = Space::new(
+        floor.room_m,
+        &[],
+        floor.obstacles,
+        &config.vehicle,
+        &config.safety,
+        speed,
+    );
+    let at = line.along.dot(&(entry.position().coords - line.origin));
+    let on = line.point(at, dist);
+    let onto = Pose2::new(on.x, on.y, entry.theta);
+    let moves = (line.inward.dot(&(entry.position().coords - line.origin)) - dist > 0.01)
+        .then(|| space.manoeuvre(from, &onto))
+        .flatten();
+    let mut way = match moves {
+        Some((_, moves)) => manoeuvre::behaviours(gains, &moves, speed),
+        None => route(gains, floor, from, &entry, speed),
+    };
     way.push(if forward {
         Behaviour::regulate(gains, goal, speed)
     } else {
@@ -2430,7 +2456,16 @@ fn door_pass(
         if on_line {
             approach = approach.min(standing);
         }
-        let beyond = next_depth_m.map_or(beyond_m, |n| beyond_m.min(n - leads - DOOR_FIT_M));
+        // Backing, the laser trails: the robot stops with it through the
+        // wall and past the laser's shortest range, so that the next
+        // room's filter starts on that room's walls, not on the room
+        // left seen through the door.
+        let beyond = if forward {
+            beyond_m
+        } else {
+            beyond_m.max(v.laser_mount.x + BACKED_LASER_BEYOND_M)
+        };
+        let beyond = next_depth_m.map_or(beyond, |n| beyond.min(n - leads - DOOR_FIT_M));
         let (a, b) = (
             g.point(d.position_m, approach),
             g.point(d.position_m, -beyond),

@@ -184,6 +184,12 @@ impl WindowFinder {
         &self.found
     }
 
+    /// Takes `w` as found before (a window a checkpoint kept): later
+    /// passes over it are averaged in, weighed by its observations.
+    pub fn know(&mut self, w: Window) {
+        self.fuse(w);
+    }
+
     /// Adds `w`, averaged with a window found before in the same place.
     fn fuse(&mut self, w: Window) {
         let same = self.found.iter_mut().find(|f| {
