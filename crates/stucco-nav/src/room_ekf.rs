@@ -238,7 +238,12 @@ impl RoomEkf {
         let (mut x, mut p) = predict(&self.x, &self.p, &d);
         let mut report = ScanUpdate::default();
         let floor = Matrix2::from_diagonal(&Vector2::from(self.config.min_wall_variance));
-        for wall in walls {
+        // The best-supported walls first: a short piece seen at the edge
+        // of the field of view must not shrink the filter onto itself
+        // before the long wall ahead is gated.
+        let mut order: Vec<&Wall> = walls.iter().collect();
+        order.sort_by_key(|w| std::cmp::Reverse(w.points));
+        for wall in order {
             let z = Vector2::new(wall.d_m, wall.gamma_rad);
             let r = wall.covariance + floor;
             let best = (0..4)
