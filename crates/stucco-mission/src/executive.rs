@@ -1470,6 +1470,7 @@ impl Executive {
         ) {
             Ok(q) => {
                 w.through = Some(next);
+                w.replans = 0;
                 a.queue.extend(q);
                 None
             }

@@ -448,9 +448,12 @@ fn merged(mut theta: f64, moves: Vec<Move>) -> Vec<Move> {
                 continue;
             }
             (Some(Move::Turn(h)), Move::Turn(next)) => {
+                // Each turn is driven the short way round: the two may be
+                // made one only if the short way round of the whole is the
+                // way both went (their sum, not its wrap, within the
+                // largest sure turn).
                 let (first, second) = (wrap_angle(*h - before), wrap_angle(next - *h));
-                let whole = wrap_angle(next - before);
-                if first * second >= 0.0 && whole.abs() <= MAX_TURN_RAD {
+                if first * second >= 0.0 && (first + second).abs() <= MAX_TURN_RAD {
                     *h = next;
                     theta = next;
                     continue;
@@ -543,6 +546,21 @@ mod tests {
         let turns = moves.iter().filter(|m| matches!(m, Move::Turn(_))).count();
         assert!(turns >= 3, "{moves:?}");
         println!("{} moves: {moves:?}", moves.len());
+    }
+
+    #[test]
+    fn turns_are_made_one_only_when_the_short_way_round_is_theirs() {
+        let deg = f64::to_radians;
+        // 45° then 150° anticlockwise: 195° in all, which the pivot would
+        // take 165° clockwise. Kept apart.
+        let apart = merged(0.0, vec![Move::Turn(deg(45.0)), Move::Turn(deg(195.0))]);
+        assert_eq!(apart.len(), 2, "{apart:?}");
+        // 30° then 60° anticlockwise: one turn of 90°.
+        let one = merged(0.0, vec![Move::Turn(deg(30.0)), Move::Turn(deg(90.0))]);
+        assert_eq!(one, vec![Move::Turn(deg(90.0))]);
+        // Back and forth: kept apart.
+        let back = merged(0.0, vec![Move::Turn(deg(30.0)), Move::Turn(deg(10.0))]);
+        assert_eq!(back.len(), 2, "{back:?}");
     }
 
     #[test]
