@@ -58,7 +58,8 @@ const REPLAN_AFTER_S: f64 = 2.0;
 /// Times the way to one door may be planned again.
 const MAX_REPLANS: usize = 3;
 /// Room left between the body and the far wall at a door's approach and
-/// beyond it, m (the protective field's margin and a little).
+/// beyond it, m (the apartment's missions set the protective field's
+/// margin to 3 cm; a mission with a longer field may be stopped there).
 const DOOR_FIT_M: f64 = 0.1;
 
 /// What the operator (or a script standing in for one) asks of the
@@ -2096,8 +2097,10 @@ fn plan_room(
 }
 
 /// The way from `from` to station `k`: along its lane when the robot is
-/// on it already (forward or backing), else onto the lane where the robot
-/// can turn (`clearance` from every wall), and along it to the station.
+/// on it already (forward or backing), else onto the lane and along it to
+/// the station — onto the lane's own line by a manoeuvre when the lane is
+/// nearer its wall than a turn on the spot allows, else where the robot
+/// can turn (`clearance` from every wall).
 fn station_way(
     config: &ExecutiveConfig,
     floor: &Floor,

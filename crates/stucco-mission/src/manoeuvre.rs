@@ -125,8 +125,10 @@ impl<'a> Space<'a> {
             })
             .collect();
         // The field's length past a move's end: its margin, and what the
-        // slowest speed a move ends at adds to it (the laws slow down to
-        // a twentieth near the goal; a turn's wheel to 0.05 rad/s).
+        // speed a move ends at adds to it — a turn's wheel slows to
+        // 0.05 rad/s about the rear axle, and a run to a twentieth of its
+        // speed, which matches that creep at runs of 0.6 m/s (faster runs
+        // end a little faster: the plan margin takes it).
         let creep = 0.05 * vehicle.wheelbase_m;
         let field =
             safety.obstacle_margin_m + creep * creep / (2.0 * safety.stop_decel_mps2) + 0.1 * creep;
