@@ -2569,8 +2569,10 @@ fn planned_way(
         &config.safety,
         speed_mps,
     );
-    if let Some(cost) = space.direct_cost(from, goal) {
-        return Some((cost, go_to(&config.gains, from, goal, speed_mps)));
+    // The plain way is checked as it will be driven.
+    let plain = go_to(&config.gains, from, goal, speed_mps);
+    if let Some(cost) = space.way_cost(from, &plain) {
+        return Some((cost, plain));
     }
     let (cost, moves) = space.manoeuvre(from, goal)?;
     Some((

@@ -15,7 +15,7 @@
 //! so that the supervisor never stops a manoeuvre planned here (the field
 //! does not know where a move ends).
 
-use crate::behaviour::Behaviour;
+use crate::behaviour::{Behaviour, BehaviourKind};
 use crate::model::{DoorEstimate, WallGeometry};
 use crate::route::rect_clear;
 use crate::supervisor::SafetyConfig;
@@ -266,9 +266,34 @@ impl<'a> Space<'a> {
         out
     }
 
+    /// The time the behaviours `way` (turns on the spot, runs forward or
+    /// backing) take from `from` when every move keeps the body clear, s;
+    /// `None` when one does not, or `way` holds another behaviour.
+    pub fn way_cost(&self, from: &Pose2, way: &[Behaviour]) -> Option<f64> {
+        let moves: Option<Vec<Move>> = way
+            .iter()
+            .map(|b| match *b.kind() {
+                BehaviourKind::Pivot { heading_rad, .. } => Some(Move::Turn(heading_rad)),
+                BehaviourKind::Regulate { goal } => Some(Move::Run {
+                    to: goal,
+                    forward: true,
+                }),
+                BehaviourKind::Reverse { goal } => Some(Move::Run {
+                    to: goal,
+                    forward: false,
+                }),
+                _ => None,
+            })
+            .collect();
+        let moves = moves?;
+        self.moves_clear(from, &moves)
+            .then(|| self.cost(from, &moves))
+    }
+
     /// The time the plain way — turn to face the goal, drive to it, turn
     /// to its heading — takes when it keeps the body clear, s.
-    pub fn direct_cost(&self, from: &Pose2, goal: &Pose2) -> Option<f64> {
+    #[cfg(test)]
+    fn direct_cost(&self, from: &Pose2, goal: &Pose2) -> Option<f64> {
         let moves = Self::direct(from, goal, true);
         self.moves_clear(from, &moves)
             .then(|| self.cost(from, &moves))
