@@ -863,8 +863,23 @@ fn add_plan_doors(view: &mut RoomView, plan: &FloorPlan, room: usize, sigma_m: f
     }
 }
 
+/// Of a box round two pieces, the part that may be neither: more makes an
+/// L (a bed beside a desk) whose inside corner is floor the robot needs.
+const MERGE_SPARE: f64 = 0.5;
+
+/// True when the box round `a` and `b` is mostly them: at most
+/// `MERGE_SPARE` more than their areas.
+fn box_of_two_is_them(a: &Obstacle, b: &Obstacle) -> bool {
+    let area = |min: [f64; 2], max: [f64; 2]| (max[0] - min[0]) * (max[1] - min[1]);
+    let min = [a.min_m[0].min(b.min_m[0]), a.min_m[1].min(b.min_m[1])];
+    let max = [a.max_m[0].max(b.max_m[0]), a.max_m[1].max(b.max_m[1])];
+    area(min, max) <= (1.0 + MERGE_SPARE) * (area(a.min_m, a.max_m) + area(b.min_m, b.max_m))
+}
+
 /// Joins pieces of furniture nearer each other than the robot is wide
 /// (chairs round a table) into one: the robot cannot pass between them.
+/// Pieces whose box would be an L with floor in its inside corner stay
+/// apart: each is checked against the body on its own.
 /// Thin pieces (a row of legs), and legs (each piece flagged so: small both
 /// ways as the laser saw it, before it was stretched to a wall) with
 /// legs, join over a table's span: what stands on them (a table's top) is
@@ -884,7 +899,7 @@ fn merge_furniture(out: &mut Vec<(Obstacle, bool)>) {
                     .max(0.0);
                 let gap = dx.hypot(dy);
                 let legs = (thin(a) || *a_leg) && (thin(b) || *b_leg);
-                gap < FURNITURE_GAP_M || (legs && gap < TABLE_SPAN_M)
+                (gap < FURNITURE_GAP_M && box_of_two_is_them(a, b)) || (legs && gap < TABLE_SPAN_M)
             });
         let Some((i, j)) = pair else {
             break;
@@ -894,5 +909,44 @@ fn merge_furniture(out: &mut Vec<(Obstacle, bool)>) {
         a.min_m = [a.min_m[0].min(b.min_m[0]), a.min_m[1].min(b.min_m[1])];
         a.max_m = [a.max_m[0].max(b.max_m[0]), a.max_m[1].max(b.max_m[1])];
         *a_leg = *a_leg && b_leg;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn piece(min_m: [f64; 2], max_m: [f64; 2]) -> (Obstacle, bool) {
+        (
+            Obstacle {
+                min_m,
+                max_m,
+                height_m: OBSTACLE_HEIGHT_M,
+            },
+            false,
+        )
+    }
+
+    #[test]
+    fn pieces_side_by_side_are_one_but_an_l_keeps_its_floor() {
+        // A sofa along a wall and a stool at its end: one piece.
+        let mut out = vec![
+            piece([0.0, 0.6], [0.85, 2.4]),
+            piece([0.0, 2.44], [0.66, 2.85]),
+        ];
+        merge_furniture(&mut out);
+        assert_eq!(out.len(), 1);
+        assert_eq!(out[0].0.min_m, [0.0, 0.6]);
+        assert_eq!(out[0].0.max_m, [0.85, 2.85]);
+        // A bed along the west wall and a desk along the east one, 10 cm
+        // apart, the desk nearer the door: their box would take the floor
+        // between the bed's foot and the door, the only floor where the
+        // robot turns. They stay two.
+        let mut out = vec![
+            piece([0.0, 1.75], [2.2, 3.65]),
+            piece([2.3, 1.0], [4.0, 2.15]),
+        ];
+        merge_furniture(&mut out);
+        assert_eq!(out.len(), 2);
     }
 }

@@ -361,6 +361,8 @@ struct ActiveTask {
     current: Option<Behaviour>,
     /// Loops of a `map_room` survey driven.
     loops: usize,
+    /// A `map_room` loop driven corner to corner.
+    legs: Option<Legs>,
     /// Seconds the way has been blocked.
     blocked_s: f64,
     /// A `plaster` task's plan and where it is in it.
@@ -368,6 +370,74 @@ struct ActiveTask {
     /// A way through doors of the floor plan (`go_to_room`, or a
     /// `pass_door` through a door the plan has).
     doorway: Option<Doorway>,
+}
+
+/// A loop driven corner to corner (a `map_room`'s, or a plastering
+/// survey's where the room is too small to turn its corners on the move),
+/// each leg planned as it starts, on what the laser has found on the floor
+/// by then.
+#[derive(Clone, Debug)]
+struct Legs {
+    corners: Vec<[f64; 2]>,
+    /// Legs to drive in all; none: round and round until the task ends.
+    count: Option<usize>,
+    /// The leg under way (the first to the first corner); none before it.
+    under_way: Option<usize>,
+    /// Times the leg under way was planned again.
+    replans: usize,
+    speed_mps: f64,
+}
+
+impl Legs {
+    fn new(corners: Vec<[f64; 2]>, count: Option<usize>, speed_mps: f64) -> Legs {
+        Legs {
+            corners,
+            count,
+            under_way: None,
+            replans: 0,
+            speed_mps,
+        }
+    }
+
+    /// The next leg's way from where the robot stands; `None` when every
+    /// leg is driven. A corner no clear way reaches is left out (an
+    /// empty way).
+    fn next(&mut self, config: &ExecutiveConfig, est: &Estimate) -> Option<Vec<Behaviour>> {
+        let next = self.under_way.map_or(0, |k| k + 1);
+        if self.count.is_some_and(|c| next >= c) {
+            return None;
+        }
+        self.under_way = Some(next);
+        self.replans = 0;
+        Some(self.leg(config, est, next))
+    }
+
+    /// The leg under way planned again (something the map did not hold
+    /// blocks it), at most `MAX_REPLANS` times.
+    fn again(&mut self, config: &ExecutiveConfig, est: &Estimate) -> Option<Vec<Behaviour>> {
+        let k = self.under_way?;
+        (self.replans < MAX_REPLANS).then(|| {
+            self.replans += 1;
+            self.leg(config, est, k)
+        })
+    }
+
+    /// Loops driven whole.
+    fn loops(&self) -> usize {
+        self.under_way.map_or(0, |k| k / self.corners.len().max(1))
+    }
+
+    /// Leg `leg`: to corner `leg` (modulo their number), arriving faced to
+    /// the next, by the planned way.
+    fn leg(&self, config: &ExecutiveConfig, est: &Estimate, leg: usize) -> Vec<Behaviour> {
+        let n = self.corners.len();
+        if n == 0 {
+            return Vec::new();
+        }
+        let (a, b) = (self.corners[leg % n], self.corners[(leg + 1) % n]);
+        let goal = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
+        planned_way(config, est, &est.pose, &goal, self.speed_mps).map_or_else(Vec::new, |w| w.1)
+    }
 }
 
 /// A task's way through doors of the floor plan, one at a time.
@@ -1081,6 +1151,15 @@ impl Executive {
                         a.current = None;
                         a.blocked_s = 0.0;
                     }
+                    // So on a leg of a loop driven corner to corner.
+                    if a.blocked_s > REPLAN_AFTER_S
+                        && let Some(legs) = a.legs.as_mut()
+                        && let Some(q) = legs.again(&self.config, inputs.estimate)
+                    {
+                        a.queue = q.into();
+                        a.current = None;
+                        a.blocked_s = 0.0;
+                    }
                     if a.blocked_s > safety.blocked_timeout_s {
                         self.fail(now, "the way stayed blocked".to_owned());
                         *checkpoint_due = true;
@@ -1134,6 +1213,7 @@ impl Executive {
                             queue: VecDeque::new(),
                             current: None,
                             loops: 0,
+                            legs: None,
                             blocked_s: 0.0,
                             plaster: None,
                             doorway: None,
@@ -1169,6 +1249,7 @@ impl Executive {
         let mut queue = VecDeque::new();
         let mut plaster = None;
         let mut doorway = None;
+        let mut legs = None;
         if let TaskSpec::Plaster {
             walls,
             ceiling,
@@ -1184,15 +1265,11 @@ impl Executive {
                 .as_ref()
                 .is_some_and(|(p, _)| p.task == index);
             let mut run = self.plaster_run(index, &walls, ceiling, region.as_ref(), est)?;
-            let gains = &self.config.gains;
             if survey && !resumed {
-                queue.extend(survey_way(
-                    gains,
-                    clearance,
-                    &self.config.vehicle,
-                    est,
-                    survey_speed_mps,
-                ));
+                let (way, corner_to_corner) =
+                    survey_way(&self.config, clearance, est, survey_speed_mps);
+                queue.extend(way);
+                legs = corner_to_corner;
                 run.phase = Phase::Surveying;
             } else {
                 let k = run.cursor.station;
@@ -1218,17 +1295,22 @@ impl Executive {
                 speed_mps,
                 ..
             } => {
-                let loop_ = closed(&survey_loop(path.as_deref(), *inset_m, est.room_m)?);
-                let (a, b) = (loop_[0], loop_[1]);
-                let towards = (b[1] - a[1]).atan2(b[0] - a[0]);
-                queue.extend(way(
-                    &self.config,
-                    est,
-                    &pose,
-                    &Pose2::new(a[0], a[1], towards),
-                    *speed_mps,
-                ));
-                queue.push_back(Behaviour::path(gains, loop_, *speed_mps));
+                let corners = survey_loop(path.as_deref(), *inset_m, est.room_m)?;
+                if turns_on_the_move(&corners, est.room_m, &self.config.vehicle) {
+                    let loop_ = closed(&corners);
+                    let (a, b) = (loop_[0], loop_[1]);
+                    let towards = (b[1] - a[1]).atan2(b[0] - a[0]);
+                    queue.extend(way(
+                        &self.config,
+                        est,
+                        &pose,
+                        &Pose2::new(a[0], a[1], towards),
+                        *speed_mps,
+                    ));
+                    queue.push_back(Behaviour::path(gains, loop_, *speed_mps));
+                } else {
+                    legs = Some(Legs::new(corners, None, *speed_mps));
+                }
             }
             TaskSpec::Localize { .. } | TaskSpec::WaitForOperator { .. } => {
                 queue.push_back(Behaviour::hold());
@@ -1400,6 +1482,7 @@ impl Executive {
             queue,
             current: None,
             loops: 0,
+            legs,
             blocked_s: 0.0,
             plaster,
             doorway,
@@ -1608,6 +1691,11 @@ impl Executive {
                     self.tool = park;
                     return TaskStep::Drive(cmd);
                 }
+                if let Some(way) = a.legs.as_mut().and_then(|l| l.next(&self.config, est)) {
+                    a.queue.extend(way);
+                    self.tool = park;
+                    return TaskStep::Drive(DriveCommand::STOP);
+                }
                 // Every wall seen from its standoff: plan on what was found.
                 let plan =
                     match plan_room(spray_tool.as_ref(), &vehicle, (walls, ceiling, region), est) {
@@ -1668,10 +1756,8 @@ impl Executive {
                         // lane and come on again, the line law taking out
                         // the heading and the offset.
                         run.retries += 1;
-                        let back = base * Pose2::new(-REALIGN_M, 0.0, 0.0);
                         a.queue
-                            .push_back(Behaviour::reverse_to(&gains, back, speed));
-                        a.queue.push_back(Behaviour::regulate(&gains, base, 0.1));
+                            .extend(realign_way(&self.config, run, &est.pose, &base, speed));
                         run.phase = Phase::Moving;
                         return TaskStep::Drive(DriveCommand::STOP);
                     }
@@ -1775,8 +1861,14 @@ impl Executive {
                         self.tool = park;
                         let last = run.plan.stations.len().saturating_sub(1);
                         let floor = floor_of(run, &vehicle, clearance);
-                        a.queue
-                            .extend(lane_exit(&gains, &floor, run, last, &est.pose, speed));
+                        a.queue.extend(lane_exit(
+                            &self.config,
+                            &floor,
+                            run,
+                            last,
+                            &est.pose,
+                            speed,
+                        ));
                         run.phase = Phase::Leaving;
                         return TaskStep::Drive(DriveCommand::STOP);
                     }
@@ -1796,7 +1888,14 @@ impl Executive {
                             )
                         });
                         if run.lane(k) != run.lane(k - 1) || !along_clear {
-                            way.extend(lane_exit(&gains, &floor, run, k - 1, &est.pose, speed));
+                            way.extend(lane_exit(
+                                &self.config,
+                                &floor,
+                                run,
+                                k - 1,
+                                &est.pose,
+                                speed,
+                            ));
                         }
                         let from = way
                             .last()
@@ -1893,7 +1992,25 @@ impl Executive {
                         format!("map_room: walls {unseen:?} not seen in {timeout_s} s")
                     });
                 }
-                if a.current.is_none() && a.queue.is_empty() {
+                if let (None, true, Some(legs)) = (&a.current, a.queue.is_empty(), a.legs.as_mut())
+                {
+                    // The first leg waits for the laser to have found what
+                    // stands on the floor near the robot (the plan that
+                    // follows stands on it too).
+                    if legs.under_way.is_none() && elapsed < LOOK_ROUND_S {
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
+                    // Corner to corner: done at any corner once the walls
+                    // are known.
+                    if unseen.is_empty() && loose.is_empty() {
+                        return TaskStep::Done;
+                    }
+                    if let Some(way) = legs.next(&self.config, est) {
+                        a.queue.extend(way);
+                    }
+                    a.loops = legs.loops();
+                }
+                if a.legs.is_none() && a.current.is_none() && a.queue.is_empty() {
                     a.loops += 1;
                     if unseen.is_empty() && loose.is_empty() {
                         return TaskStep::Done;
@@ -2133,14 +2250,7 @@ fn station_way(
     // on its own line, in the moves that get there: from the turning
     // line, the run-in would end short of the lane and the robot would
     // come back for the station.
-    let space = Space::new(
-        floor.room_m,
-        &[],
-        floor.obstacles,
-        &config.vehicle,
-        &config.safety,
-        speed,
-    );
+    let space = plaster_space(config, run, speed);
     let at = line.along.dot(&(entry.position().coords - line.origin));
     let on = line.point(at, dist);
     let onto = Pose2::new(on.x, on.y, entry.theta);
@@ -2156,7 +2266,66 @@ fn station_way(
     } else {
         Behaviour::reverse_to(gains, goal, speed)
     });
-    way
+    // The way as it will be driven must keep the body and the field
+    // clear; where the turning places are too few (a small room with a
+    // counter along one wall), the manoeuvre onto the station itself.
+    if space.way_cost(from, &way).is_some() {
+        return way;
+    }
+    match space.manoeuvre(from, &goal) {
+        Some((_, moves)) => manoeuvre::behaviours(gains, &moves, speed),
+        None => way,
+    }
+}
+
+/// The space the way between stations is checked in: the plan's room
+/// and what stands on its floor (no doorway: the robot stays in).
+fn plaster_space<'a>(config: &'a ExecutiveConfig, run: &'a PlasterRun, speed: f64) -> Space<'a> {
+    Space::new(
+        run.plan.room.size_m,
+        &[],
+        &run.plan.room.obstacles,
+        &config.vehicle,
+        &config.safety,
+        speed,
+    )
+}
+
+/// Onto station `base` again from `from` beside it or turned on it: back
+/// off along the lane (as far as `REALIGN_M`) and come on again, the line
+/// law taking out the heading and the offset; where the lane is too short
+/// behind the station (furniture, a corner), on past it and back onto it;
+/// where neither is clear, the manoeuvre onto it; and where none is, no
+/// second approach (the gantry sprays from where the robot stands).
+fn realign_way(
+    config: &ExecutiveConfig,
+    run: &PlasterRun,
+    from: &Pose2,
+    base: &Pose2,
+    speed: f64,
+) -> Vec<Behaviour> {
+    let gains = &config.gains;
+    let space = plaster_space(config, run, speed);
+    let runs = [1.0, 0.8, 0.6, 0.4].map(|f| f * REALIGN_M);
+    let back = runs.iter().map(|&d| {
+        vec![
+            Behaviour::reverse_to(gains, *base * Pose2::new(-d, 0.0, 0.0), speed),
+            Behaviour::regulate(gains, *base, 0.1),
+        ]
+    });
+    let on = runs.iter().map(|&d| {
+        vec![
+            Behaviour::regulate(gains, *base * Pose2::new(d, 0.0, 0.0), speed),
+            Behaviour::reverse_to(gains, *base, 0.1),
+        ]
+    });
+    if let Some(way) = back.chain(on).find(|w| space.way_cost(from, w).is_some()) {
+        return way;
+    }
+    space
+        .manoeuvre(from, base)
+        .map(|(_, moves)| manoeuvre::behaviours(gains, &moves, 0.1))
+        .unwrap_or_default()
 }
 
 /// Where the robot comes onto the lane of station `k`: a place to turn,
@@ -2209,10 +2378,12 @@ fn lane_entry(floor: &Floor, run: &PlasterRun, k: usize) -> Option<(Pose2, bool)
 }
 
 /// Out of the lane of station `k` (the robot at `from` on it) to where it
-/// can turn: forward along the lane and away from its wall, the front
-/// leading, as a pass along a wall ends.
+/// can turn: along the lane and away from its wall, forward (the front
+/// leading, as a pass along a wall ends) or, where that is nearer, backing;
+/// nothing when that way is not clear as it will be driven (a lane ending
+/// at a counter): the way on starts from the lane.
 fn lane_exit(
-    gains: &GainSchedule,
+    config: &ExecutiveConfig,
     floor: &Floor,
     run: &PlasterRun,
     k: usize,
@@ -2233,20 +2404,29 @@ fn lane_exit(
     // The robot will turn there: the nearest place along the lane where
     // nothing stands within its sweep, reached with the body clear.
     let off = dist.max(clearance);
-    let out_at = (0..200)
+    let Some(out_at) = (0..200)
         .flat_map(|k| [want + 0.05 * k as f64, want - 0.05 * k as f64])
         .filter(|a| (lo..=hi).contains(a))
         .find(|a| {
             let o = line.point(*a, off);
             floor.turnable_among_obstacles(&o) && floor.sweep_clear(&p, &o, &heading)
         })
-        .unwrap_or(want);
+    else {
+        return Vec::new();
+    };
     let o = line.point(out_at, off);
-    vec![Behaviour::regulate(
-        gains,
-        Pose2::new(o.x, o.y, from.theta),
-        speed,
-    )]
+    let goal = Pose2::new(o.x, o.y, from.theta);
+    let way = vec![if heading.dot(&(o - p)) >= 0.0 {
+        Behaviour::regulate(&config.gains, goal, speed)
+    } else {
+        Behaviour::reverse_to(&config.gains, goal, speed)
+    }];
+    let space = plaster_space(config, run, speed);
+    if space.way_cost(from, &way).is_some() {
+        way
+    } else {
+        Vec::new()
+    }
 }
 
 /// The floor of the plan's room as the way between stations sees it.
@@ -2261,36 +2441,80 @@ fn floor_of<'a>(run: &'a PlasterRun, vehicle: &VehicleSpec, clearance: f64) -> F
 
 /// A look at every wall before the plan is made again on what the camera
 /// found: one loop round the room, clockwise so the camera (looking left)
-/// faces each wall in turn, `clearance` from the walls (the robot turns at
-/// its corners) and clear of what stands on the floor.
+/// faces each wall in turn. Where the room leaves room for it, the loop
+/// stands `clearance` from the walls and is turned on the move; where it
+/// does not (a small kitchen, a furnished bedroom), it runs nearer the
+/// walls, at `SURVEY_LEG_STANDOFF_M`, corner to corner, each leg the
+/// planned way as it starts (the legs returned). Either keeps clear of
+/// what stands on the floor; its start is reached by the planned way.
 fn survey_way(
-    gains: &GainSchedule,
+    config: &ExecutiveConfig,
     clearance: f64,
-    vehicle: &VehicleSpec,
     est: &Estimate,
     speed: f64,
-) -> Vec<Behaviour> {
+) -> (Vec<Behaviour>, Option<Legs>) {
+    let vehicle = &config.vehicle;
     let [xs, ys] = est.room_m;
     // What the body reaches toward the furniture beside the loop's long
     // sides (half its width) and at its ends (its front, turning).
     let side = 0.5 * vehicle.width_m + 0.15;
     let front = vehicle.length_m - vehicle.rear_overhang_m + 0.15;
-    let (half_x, half_y) = if xs >= ys {
-        (front, side)
+    let half = if xs >= ys {
+        [front, side]
     } else {
-        (side, front)
+        [side, front]
     };
     // The loop's ends stand off a little more: its corners are turned
     // on the move, the front swinging out past them.
     let ends = clearance + 0.2;
-    let (mut x0, mut x1, mut y0, mut y1) = if xs >= ys {
-        (ends, xs - ends, clearance, ys - clearance)
+    let margins = if xs >= ys {
+        [ends, clearance]
     } else {
-        (clearance, xs - clearance, ends, ys - ends)
+        [clearance, ends]
     };
-    // Keep the loop off the furniture near the walls: each piece moves
-    // the side it stands before in; of two (a piece in a corner), the one
-    // that costs the loop least (either alone clears it).
+    if let Some(corners) = survey_rect(est, margins, half, SURVEY_LOOP_MIN_M) {
+        let path = closed(&corners);
+        let (a, b) = (path[0], path[1]);
+        let start = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
+        let mut way = self::way(config, est, &est.pose, &start, speed);
+        way.push(Behaviour::path(&config.gains, path, speed));
+        return (way, None);
+    }
+    let near = SURVEY_LEG_STANDOFF_M;
+    let Some(corners) = survey_rect(est, [near, near], [side, side], 0.3) else {
+        return (Vec::new(), None);
+    };
+    // Corner to corner, stopping at each: to the first, then round to it.
+    (
+        Vec::new(),
+        Some(Legs::new(corners.to_vec(), Some(corners.len() + 1), speed)),
+    )
+}
+
+/// Sides shorter than this make the survey loop, turned on the move, too
+/// small to see a window whole (a kitchen's 0.4 m): it is driven corner to
+/// corner nearer the walls instead, m.
+const SURVEY_LOOP_MIN_M: f64 = 0.6;
+
+/// How far from the walls a survey loop driven corner to corner runs, m.
+const SURVEY_LEG_STANDOFF_M: f64 = 0.6;
+
+/// The corners of a survey loop `margins` (along x, along y) inside the
+/// walls, moved off the furniture near the walls (each piece moves the
+/// side it stands before in by `half` — what the body reaches toward it
+/// across x and across y; of two, the one that costs the loop least), in
+/// the order it is driven: west along the south side first, the camera
+/// on the south wall. `None` when a side is shorter than `min_side`.
+fn survey_rect(
+    est: &Estimate,
+    margins: [f64; 2],
+    half: [f64; 2],
+    min_side: f64,
+) -> Option<[[f64; 2]; 4]> {
+    let [xs, ys] = est.room_m;
+    let [half_x, half_y] = half;
+    let (mut x0, mut x1, mut y0, mut y1) =
+        (margins[0], xs - margins[0], margins[1], ys - margins[1]);
     for o in &est.obstacles {
         let (cx, cy) = (
             0.5 * (o.min_m[0] + o.max_m[0]),
@@ -2311,6 +2535,39 @@ fn survey_way(
         if cy > 0.5 * ys && o.min_m[1] - half_y < y1 && o.min_m[1] > 0.5 * ys {
             moves.push(((y1 - (o.min_m[1] - half_y)) * w, 3, o.min_m[1] - half_y));
         }
+        // A piece reaching across the middle (a bed and a desk along a
+        // bedroom) that the body would meet: whichever side it cuts least.
+        // (Within the loop, clear of its sides by the body's half width
+        // and more, it is driven round.)
+        let r = half_x.min(half_y);
+        let meets = o.max_m[0] + r > x0
+            && o.min_m[0] - r < x1
+            && o.max_m[1] + r > y0
+            && o.min_m[1] - r < y1
+            && !(o.min_m[0] - r > x0
+                && o.max_m[0] + r < x1
+                && o.min_m[1] - r > y0
+                && o.max_m[1] + r < y1);
+        if moves.is_empty() && meets {
+            let cuts = [
+                (0, o.max_m[0] + half_x, x1 - (o.max_m[0] + half_x)),
+                (1, o.min_m[0] - half_x, (o.min_m[0] - half_x) - x0),
+                (2, o.max_m[1] + half_y, y1 - (o.max_m[1] + half_y)),
+                (3, o.min_m[1] - half_y, (o.min_m[1] - half_y) - y0),
+            ];
+            moves.extend(
+                cuts.into_iter()
+                    .filter(|c| c.2 > 0.0)
+                    .map(|(side, at, left)| {
+                        let loss = if side < 2 {
+                            (w - left) * h
+                        } else {
+                            (h - left) * w
+                        };
+                        (loss, side, at)
+                    }),
+            );
+        }
         if let Some(&(_, side, at)) = moves.iter().min_by(|a, b| a.0.total_cmp(&b.0)) {
             match side {
                 0 => x0 = at,
@@ -2320,17 +2577,7 @@ fn survey_way(
             }
         }
     }
-    if x1 - x0 < 0.3 || y1 - y0 < 0.3 {
-        return Vec::new();
-    }
-    // West along the south side first: the camera on the south wall.
-    let corners = [[x1, y0], [x0, y0], [x0, y1], [x1, y1]];
-    let path = closed(&corners);
-    let (a, b) = (path[0], path[1]);
-    let start = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
-    let mut way = go_to(gains, &est.pose, &start, speed);
-    way.push(Behaviour::path(gains, path, speed));
-    way
+    (x1 - x0 >= min_side && y1 - y0 >= min_side).then_some([[x1, y0], [x0, y0], [x0, y1], [x1, y1]])
 }
 
 /// Runs the behaviours of `a`'s queue: the command of the one under way,
@@ -2394,6 +2641,22 @@ fn survey_loop(
         [xs - inset_m, ys - inset_m],
         [inset_m, ys - inset_m],
     ])
+}
+
+/// Margin a loop's corners keep from the walls beyond the front's reach
+/// ahead of the rear axle, for the loop to be turned on the move, m.
+const ON_THE_MOVE_SPARE_M: f64 = 0.1;
+
+/// True when a `map_room` loop through `corners` can be driven as one path,
+/// its corners turned on the move: the front swings out past each corner
+/// by as much as its reach ahead of the rear axle, and every corner stands
+/// that far and `ON_THE_MOVE_SPARE_M` more from every wall. A loop in a
+/// furnished bedroom, between the bed and the wall, does not.
+fn turns_on_the_move(corners: &[[f64; 2]], room_m: [f64; 2], vehicle: &VehicleSpec) -> bool {
+    let reach = vehicle.length_m - vehicle.rear_overhang_m + ON_THE_MOVE_SPARE_M;
+    corners
+        .iter()
+        .all(|&[x, y]| x.min(room_m[0] - x) >= reach && y.min(room_m[1] - y) >= reach)
 }
 
 /// The loop through `points` as a path that starts and ends halfway along
@@ -2574,12 +2837,38 @@ fn planned_way(
     if let Some(cost) = space.way_cost(from, &plain) {
         return Some((cost, plain));
     }
-    let (cost, moves) = space.manoeuvre(from, goal)?;
-    Some((
-        cost,
-        manoeuvre::behaviours(&config.gains, &moves, speed_mps),
-    ))
+    if let Some((cost, moves)) = space.manoeuvre(from, goal) {
+        return Some((
+            cost,
+            manoeuvre::behaviours(&config.gains, &moves, speed_mps),
+        ));
+    }
+    if space.pose_clear(from) {
+        return None;
+    }
+    // Standing nearer something than the body's margins allow (it was
+    // seen only on the way here): back out along the way the robot came,
+    // as little as frees it, and go on from there.
+    BACK_OUT_M.iter().find_map(|&d| {
+        let back = *from * Pose2::new(-d, 0.0, 0.0);
+        if !space.pose_clear(&back) {
+            return None;
+        }
+        let (cost, moves) = space.manoeuvre(&back, goal)?;
+        let mut way = vec![Behaviour::reverse_to(&config.gains, back, speed_mps)];
+        way.extend(manoeuvre::behaviours(&config.gains, &moves, speed_mps));
+        Some((cost + 0.5 + d / speed_mps, way))
+    })
 }
+
+/// Seconds a `map_room` loop driven corner to corner stands before its
+/// first leg: the floor map needs a score of echoes in a cell (the scans
+/// come at 10 Hz) to take something as standing there.
+const LOOK_ROUND_S: f64 = 6.0;
+
+/// How far a robot standing too near something may back out before its
+/// way is planned, m (tried in turn).
+const BACK_OUT_M: [f64; 4] = [0.1, 0.2, 0.3, 0.4];
 
 /// [`planned_way`], or failing that the plain way, the supervisor
 /// stopping the robot before it touches anything.

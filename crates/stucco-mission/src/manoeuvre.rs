@@ -219,6 +219,12 @@ impl<'a> Space<'a> {
         (0..=n).all(|k| self.body_clear(&(a + (end - a) * (k as f64 / n as f64)), theta))
     }
 
+    /// True when the body (with its field's sides) standing at `pose` is
+    /// clear.
+    pub fn pose_clear(&self, pose: &Pose2) -> bool {
+        self.body_clear(&pose.position().coords, pose.theta)
+    }
+
     /// True when every move from `from` keeps the body clear.
     pub fn moves_clear(&self, from: &Pose2, moves: &[Move]) -> bool {
         let (mut p, mut theta) = (from.position().coords, from.theta);

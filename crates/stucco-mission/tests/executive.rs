@@ -29,6 +29,8 @@ struct Robot {
     room_m: [f64; 2],
     /// σ of the position, m.
     position_sigma: f64,
+    /// What the map has standing on the floor.
+    floor: Vec<stucco_plan::Obstacle>,
 }
 
 impl Robot {
@@ -44,6 +46,7 @@ impl Robot {
             room: None,
             room_m: ROOM,
             position_sigma: 0.003,
+            floor: Vec::new(),
         }
     }
 
@@ -59,7 +62,7 @@ impl Robot {
             doors: self.doors.clone(),
             height_m: 2.6,
             windows: Vec::new(),
-            obstacles: Vec::new(),
+            obstacles: self.floor.clone(),
             room: self.room,
         }
     }
@@ -1546,5 +1549,100 @@ fn the_robot_turns_in_a_hall_too_narrow_to_turn_on_the_spot_in() {
     // keeps the field's 2 cm sides and 2 cm more; the rest is the line
     // law's tracking).
     println!("closest to a wall: {closest:.3} m");
+    assert!(closest >= 0.01, "{closest}");
+}
+
+/// How far the body's outline keeps off the walls of its room and off
+/// every box on its floor, m (negative: into one).
+fn body_clearance(robot: &Robot) -> f64 {
+    let s = &robot.spec;
+    let front = s.length_m - s.rear_overhang_m;
+    let half = 0.5 * s.width_m;
+    // The outline, every 5 cm.
+    let outline: Vec<Point2<f64>> = (0..=20)
+        .flat_map(|k| {
+            let t = k as f64 / 20.0;
+            let x = -s.rear_overhang_m + t * (front + s.rear_overhang_m);
+            let y = -half + t * 2.0 * half;
+            [(x, -half), (x, half), (-s.rear_overhang_m, y), (front, y)]
+        })
+        .map(|(x, y)| robot.pose.transform_point(&Point2::new(x, y)))
+        .collect();
+    let [xs, ys] = robot.room_m;
+    outline
+        .iter()
+        .map(|p| {
+            let walls = p.x.min(xs - p.x).min(p.y).min(ys - p.y);
+            robot.floor.iter().fold(walls, |m, o| {
+                let dx = (o.min_m[0] - p.x).max(p.x - o.max_m[0]);
+                let dy = (o.min_m[1] - p.y).max(p.y - o.max_m[1]);
+                // Outside: the distance; inside: how deep (negative).
+                let d = if dx > 0.0 || dy > 0.0 {
+                    dx.max(0.0).hypot(dy.max(0.0))
+                } else {
+                    dx.max(dy)
+                };
+                m.min(d)
+            })
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn the_robot_plasters_a_kitchen_with_a_counter_along_one_wall_and_a_column_in_a_corner() {
+    // The apartment's kitchen as its map has it: 2.85 m square, a counter
+    // along the south wall 0.75 m deep, a column's box in the north-east
+    // corner. The survey loop turned on the move would be 0.4 m long; it
+    // is driven corner to corner. The ways between stations, out of the
+    // lanes and onto them again are the planned ones, every one clear.
+    let tool = stucco_plan::SprayTool::default();
+    let mut cfg = config(true);
+    cfg.spray = Some(tool);
+    cfg.safety.obstacle_margin_m = 0.03;
+    cfg.safety.lateral_margin_m = 0.02;
+    let mut exec = Executive::new(cfg, vec![plaster(true)]);
+    let mut robot = Robot::at(Pose2::new(1.45, 2.0, -std::f64::consts::FRAC_PI_2));
+    robot.room_m = [2.85, 2.85];
+    robot.floor = vec![
+        stucco_plan::Obstacle {
+            min_m: [0.0, 0.0],
+            max_m: [2.85, 0.75],
+            height_m: 1.0,
+        },
+        stucco_plan::Obstacle {
+            min_m: [2.25, 2.2],
+            max_m: [2.85, 2.85],
+            height_m: 1.0,
+        },
+    ];
+    let (mut closest, mut passes, mut legs) = (f64::INFINITY, 0, 0);
+    let mut planned = 0;
+    for _ in 0..(3000.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        if let Some(plan) = exec.plaster_plan() {
+            planned = plan.stations.iter().map(|s| s.passes.len()).sum();
+        }
+        passes += out
+            .events
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::PassDone { .. }))
+            .count();
+        legs += out
+            .events
+            .iter()
+            .filter(|e| matches!(&e.kind, EventKind::BehaviourStarted { behaviour, .. } if behaviour == "path"))
+            .count();
+        robot.drive(out.drive);
+        closest = closest.min(body_clearance(&robot));
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    assert_eq!(passes, planned);
+    assert!(planned >= 8, "{planned} passes");
+    // No loop turned on the move: the survey went corner to corner.
+    assert_eq!(legs, 0);
+    println!("closest to a wall or the furniture: {closest:.3} m");
     assert!(closest >= 0.01, "{closest}");
 }

@@ -276,10 +276,12 @@ pub fn plan(
             room.height_m, tool.lift_m[0], tool.lift_m[1]
         )));
     }
+    let body = Body::of(vehicle);
     let planner = Planner {
         room,
         tool,
-        body: Body::of(vehicle),
+        body,
+        floor: Floor::reached(room, body.half_width_m + tool.clearance_m, start),
     };
     let surfaces = room.surfaces();
     let mut lanes: Vec<(Lane, Vec<Station>)> = Vec::new();
@@ -401,6 +403,111 @@ struct Planner<'a> {
     room: &'a RoomModel,
     tool: &'a SprayTool,
     body: Body,
+    floor: Floor,
+}
+
+/// Cells of the floor the robot can get to, m.
+const FLOOR_CELL_M: f64 = 0.05;
+
+/// The floor the robot can get to from where it starts: the cells whose
+/// middle is `radius` or more from every wall and obstacle (the robot
+/// passes there, its rear axle on the cell), joined to the start's cell.
+/// A station on floor that furniture cuts off from the robot (the far side
+/// of a bed and a desk that span a bedroom) cannot be reached whatever the
+/// way; its plaster is reported unreachable.
+struct Floor {
+    cells: [usize; 2],
+    radius_m: f64,
+    reached: Vec<bool>,
+}
+
+impl Floor {
+    fn reached(room: &RoomModel, radius: f64, start: &Pose2) -> Floor {
+        let [xs, ys] = room.size_m;
+        let cells = [
+            ((xs / FLOOR_CELL_M).ceil() as usize).max(1),
+            ((ys / FLOOR_CELL_M).ceil() as usize).max(1),
+        ];
+        let centre = |i: usize, j: usize| {
+            [
+                (i as f64 + 0.5) * FLOOR_CELL_M,
+                (j as f64 + 0.5) * FLOOR_CELL_M,
+            ]
+        };
+        let open = |i: usize, j: usize| {
+            let [x, y] = centre(i, j);
+            x.min(xs - x).min(y).min(ys - y) >= radius
+                && room.obstacles.iter().all(|o| {
+                    let dx = (o.min_m[0] - x).max(x - o.max_m[0]).max(0.0);
+                    let dy = (o.min_m[1] - y).max(y - o.max_m[1]).max(0.0);
+                    dx.hypot(dy) >= radius
+                })
+        };
+        let n = cells[0] * cells[1];
+        let is_open: Vec<bool> = (0..n).map(|k| open(k % cells[0], k / cells[0])).collect();
+        // From the open cell nearest the start (the robot may stand nearer
+        // something than `radius`).
+        let p = start.position();
+        let seed = (0..n).filter(|&k| is_open[k]).min_by(|&a, &b| {
+            let d = |k: usize| {
+                let [x, y] = centre(k % cells[0], k / cells[0]);
+                (x - p.x).hypot(y - p.y)
+            };
+            d(a).total_cmp(&d(b))
+        });
+        let mut reached = vec![false; n];
+        let mut stack: Vec<usize> = seed.into_iter().collect();
+        while let Some(k) = stack.pop() {
+            if reached[k] || !is_open[k] {
+                continue;
+            }
+            reached[k] = true;
+            let (i, j) = (k % cells[0], k / cells[0]);
+            if i > 0 {
+                stack.push(k - 1);
+            }
+            if i + 1 < cells[0] {
+                stack.push(k + 1);
+            }
+            if j > 0 {
+                stack.push(k - cells[0]);
+            }
+            if j + 1 < cells[1] {
+                stack.push(k + cells[0]);
+            }
+        }
+        Floor {
+            cells,
+            radius_m: radius,
+            reached,
+        }
+    }
+
+    /// True when the robot can get to `p` (its rear axle there): a reached
+    /// cell lies within the passage's radius of it (a station stands
+    /// nearer a wall, or a corner, than the way it came by is wide).
+    fn reaches(&self, p: [f64; 2]) -> bool {
+        let r = self.radius_m;
+        let k = (r / FLOOR_CELL_M).ceil() as i64 + 1;
+        let (i, j) = (
+            (p[0] / FLOOR_CELL_M).floor() as i64,
+            (p[1] / FLOOR_CELL_M).floor() as i64,
+        );
+        let [ni, nj] = self.cells.map(|c| c as i64);
+        (-k..=k).any(|di| {
+            (-k..=k).any(|dj| {
+                let (a, b) = (i + di, j + dj);
+                let (x, y) = (
+                    (a as f64 + 0.5) * FLOOR_CELL_M,
+                    (b as f64 + 0.5) * FLOOR_CELL_M,
+                );
+                (0..ni).contains(&a)
+                    && (0..nj).contains(&b)
+                    && self.reached[(b * ni + a) as usize]
+                    && (x - p[0]).hypot(y - p[1]) <= r
+            })
+        })
+    }
 }
 
 /// Step of the search for stations' bases, m.
@@ -422,7 +529,7 @@ impl Planner<'_> {
                 && hi[0] > o.min_m[0] - c
                 && lo[1] < o.max_m[1] + c
                 && hi[1] > o.min_m[1] - c
-        })
+        }) && self.floor.reaches([pose.x, pose.y])
     }
 
     /// The stations along wall `w`, far end first.
@@ -1091,6 +1198,51 @@ mod tests {
         let s = predicted_score(&p);
         assert!(s.wall_coverage_pct >= 99.9, "{s:?}");
         assert!(s.overspray_pct <= 0.5 && s.overspray_pct > 0.0, "{s:?}");
+    }
+
+    #[test]
+    fn floor_furniture_cuts_off_from_the_robot_is_reported_not_planned() {
+        // A bed and a desk end to end across a 4 m bedroom, 1.5–2.45 m in
+        // from its south wall; the robot stands south of them. The strip
+        // north of them is floor it cannot get to: no station there, and
+        // the north wall is reported unreachable, not dropped.
+        let from_the_door = |r: &RoomModel| {
+            let at_door = Pose2::new(3.4, 0.6, std::f64::consts::FRAC_PI_2);
+            plan(r, &tool(), &VehicleSpec::default(), &at_door).expect("a plan")
+        };
+        let mut r = room([4.0, 3.65], 2.6, Vec::new());
+        r.obstacles = vec![Obstacle {
+            min_m: [0.0, 1.5],
+            max_m: [4.0, 2.45],
+            height_m: 0.75,
+        }];
+        let p = from_the_door(&r);
+        check_moves(&p);
+        assert!(!p.stations.is_empty());
+        for s in &p.stations {
+            assert!(
+                s.base.y < 1.5,
+                "a station beyond the furniture: {:?}",
+                s.base
+            );
+        }
+        let north = p
+            .unreachable
+            .iter()
+            .find(|u| u.surface == SurfaceId::Wall(WallName::North))
+            .expect("the north wall behind the furniture");
+        // All of it: the wall less its 10 cm edges, 3.8 × 2.4 m.
+        assert!(north.area_m2 > 0.99 * 3.8 * 2.4, "{north:?}");
+        // The same room with the strip joined to the rest by a gap the
+        // robot passes (the desk 1.2 m short of the east wall): the
+        // north wall is planned.
+        r.obstacles[0].max_m[0] = 2.8;
+        let p = from_the_door(&r);
+        assert!(
+            p.stations.iter().any(|s| s.base.y > 2.45),
+            "{:?}",
+            p.stations.len()
+        );
     }
 
     #[test]
