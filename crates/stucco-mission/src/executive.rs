@@ -385,6 +385,8 @@ struct Legs {
     under_way: Option<usize>,
     /// Times the leg under way was planned again.
     replans: usize,
+    /// Legs in a row that no clear way reached.
+    unreached: usize,
     speed_mps: f64,
 }
 
@@ -395,8 +397,14 @@ impl Legs {
             count,
             under_way: None,
             replans: 0,
+            unreached: 0,
             speed_mps,
         }
+    }
+
+    /// True when no clear way reached any corner the last time round.
+    fn stuck(&self) -> bool {
+        self.unreached >= self.corners.len().max(1)
     }
 
     /// The next leg's way from where the robot stands; `None` when every
@@ -409,7 +417,13 @@ impl Legs {
         }
         self.under_way = Some(next);
         self.replans = 0;
-        Some(self.leg(config, est, next))
+        let way = self.leg(config, est, next);
+        self.unreached = if way.is_empty() {
+            self.unreached + 1
+        } else {
+            0
+        };
+        Some(way)
     }
 
     /// The leg under way planned again (something the map did not hold
@@ -422,9 +436,10 @@ impl Legs {
         })
     }
 
-    /// Loops driven whole.
+    /// Loops driven whole (the first leg only reaches the loop).
     fn loops(&self) -> usize {
-        self.under_way.map_or(0, |k| k / self.corners.len().max(1))
+        self.under_way
+            .map_or(0, |k| k.saturating_sub(1) / self.corners.len().max(1))
     }
 
     /// Leg `leg`: to corner `leg` (modulo their number), arriving faced to
@@ -1691,10 +1706,20 @@ impl Executive {
                     self.tool = park;
                     return TaskStep::Drive(cmd);
                 }
-                if let Some(way) = a.legs.as_mut().and_then(|l| l.next(&self.config, est)) {
-                    a.queue.extend(way);
-                    self.tool = park;
-                    return TaskStep::Drive(DriveCommand::STOP);
+                // The survey's legs, while a clear way reaches a corner;
+                // then they are done with (a way blocked later in the
+                // task must not be taken for one of them).
+                match a.legs.as_mut() {
+                    Some(l) if !l.stuck() => {
+                        if let Some(way) = l.next(&self.config, est) {
+                            a.queue.extend(way);
+                            self.tool = park;
+                            return TaskStep::Drive(DriveCommand::STOP);
+                        }
+                        a.legs = None;
+                    }
+                    Some(_) => a.legs = None,
+                    None => {}
                 }
                 // Every wall seen from its standoff: plan on what was found.
                 let plan =
@@ -2005,10 +2030,19 @@ impl Executive {
                     if unseen.is_empty() && loose.is_empty() {
                         return TaskStep::Done;
                     }
-                    if let Some(way) = legs.next(&self.config, est) {
-                        a.queue.extend(way);
+                    if legs.stuck() {
+                        return TaskStep::Failed(
+                            "map_room: no clear way reaches any corner of the loop".to_owned(),
+                        );
                     }
+                    let way = legs.next(&self.config, est).unwrap_or_default();
                     a.loops = legs.loops();
+                    if way.is_empty() {
+                        // No clear way to this corner: the next one, next
+                        // tick.
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
+                    a.queue.extend(way);
                 }
                 if a.legs.is_none() && a.current.is_none() && a.queue.is_empty() {
                     a.loops += 1;
@@ -2378,10 +2412,10 @@ fn lane_entry(floor: &Floor, run: &PlasterRun, k: usize) -> Option<(Pose2, bool)
 }
 
 /// Out of the lane of station `k` (the robot at `from` on it) to where it
-/// can turn: along the lane and away from its wall, forward (the front
-/// leading, as a pass along a wall ends) or, where that is nearer, backing;
-/// nothing when that way is not clear as it will be driven (a lane ending
-/// at a counter): the way on starts from the lane.
+/// can turn: along the lane and away from its wall, to the place nearest
+/// a run-in ahead (the front leading, as a pass along a wall ends) whose
+/// way, forward or backing, is clear as it will be driven; nothing when
+/// none is (a lane ending at a counter): the way on starts from the lane.
 fn lane_exit(
     config: &ExecutiveConfig,
     floor: &Floor,
@@ -2404,29 +2438,24 @@ fn lane_exit(
     // The robot will turn there: the nearest place along the lane where
     // nothing stands within its sweep, reached with the body clear.
     let off = dist.max(clearance);
-    let Some(out_at) = (0..200)
+    let space = plaster_space(config, run, speed);
+    (0..200)
         .flat_map(|k| [want + 0.05 * k as f64, want - 0.05 * k as f64])
         .filter(|a| (lo..=hi).contains(a))
-        .find(|a| {
-            let o = line.point(*a, off);
-            floor.turnable_among_obstacles(&o) && floor.sweep_clear(&p, &o, &heading)
+        .find_map(|a| {
+            let o = line.point(a, off);
+            if !(floor.turnable_among_obstacles(&o) && floor.sweep_clear(&p, &o, &heading)) {
+                return None;
+            }
+            let goal = Pose2::new(o.x, o.y, from.theta);
+            let way = vec![if heading.dot(&(o - p)) >= 0.0 {
+                Behaviour::regulate(&config.gains, goal, speed)
+            } else {
+                Behaviour::reverse_to(&config.gains, goal, speed)
+            }];
+            space.way_cost(from, &way).is_some().then_some(way)
         })
-    else {
-        return Vec::new();
-    };
-    let o = line.point(out_at, off);
-    let goal = Pose2::new(o.x, o.y, from.theta);
-    let way = vec![if heading.dot(&(o - p)) >= 0.0 {
-        Behaviour::regulate(&config.gains, goal, speed)
-    } else {
-        Behaviour::reverse_to(&config.gains, goal, speed)
-    }];
-    let space = plaster_space(config, run, speed);
-    if space.way_cost(from, &way).is_some() {
-        way
-    } else {
-        Vec::new()
-    }
+        .unwrap_or_default()
 }
 
 /// The floor of the plan's room as the way between stations sees it.

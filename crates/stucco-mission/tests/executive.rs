@@ -521,22 +521,25 @@ fn the_estop_stops_at_once_and_waits_for_release_and_resume() {
     assert!(out.checkpoint_due);
 }
 
+/// A `map_room` on `path` (the default loop 1 m in without), done when
+/// every wall is seen 20 times and the size known to 5 mm.
+fn map_room(path: Option<Vec<[f64; 2]>>) -> TaskSpec {
+    TaskSpec::MapRoom {
+        path,
+        walls: WallName::ALL.to_vec(),
+        min_sightings: 20,
+        inset_m: 1.0,
+        speed_mps: 0.4,
+        max_size_sigma_m: 0.005,
+        timeout_s: 120.0,
+    }
+}
+
 #[test]
 fn map_room_drives_loops_until_the_room_is_known() {
     let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
     robot.room_sigma = [0.05; 2];
-    let mut exec = executive(
-        vec![TaskSpec::MapRoom {
-            path: None,
-            walls: WallName::ALL.to_vec(),
-            min_sightings: 20,
-            inset_m: 1.0,
-            speed_mps: 0.4,
-            max_size_sigma_m: 0.005,
-            timeout_s: 120.0,
-        }],
-        true,
-    );
+    let mut exec = executive(vec![map_room(None)], true);
     let mut loops_seen = 0;
     for _ in 0..(120.0 / DT) as usize {
         // The size is learnt on the second loop (a stand-in for the
@@ -1645,4 +1648,32 @@ fn the_robot_plasters_a_kitchen_with_a_counter_along_one_wall_and_a_column_in_a_
     assert_eq!(legs, 0);
     println!("closest to a wall or the furniture: {closest:.3} m");
     assert!(closest >= 0.01, "{closest}");
+}
+
+#[test]
+fn a_map_room_loop_no_clear_way_reaches_fails_saying_so_without_moving_into_anything() {
+    // A loop near the walls (driven corner to corner), every corner of it
+    // taken by furniture: the task fails naming why, the robot where it
+    // stood.
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    robot.room_sigma = [0.05; 2];
+    let corner = |x: f64, y: f64| stucco_plan::Obstacle {
+        min_m: [x - 0.5, y - 0.5],
+        max_m: [x + 0.5, y + 0.5],
+        height_m: 0.8,
+    };
+    robot.floor = vec![corner(0.5, 0.5), corner(4.5, 0.5), corner(4.5, 2.5)];
+    let mut exec = executive(
+        vec![map_room(Some(vec![[0.5, 0.5], [4.5, 0.5], [4.5, 2.5]]))],
+        true,
+    );
+    let events = run(&mut exec, &mut robot, 60.0, |_, _| Vec::new());
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?} {:?}", exec.mode(), kinds(&events));
+    };
+    assert!(
+        reason.contains("no clear way reaches any corner"),
+        "{reason}"
+    );
+    assert!((robot.pose.position() - Point2::new(2.5, 1.5)).norm() < 1e-6);
 }
