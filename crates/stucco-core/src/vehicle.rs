@@ -72,6 +72,13 @@ impl Default for VehicleSpec {
 }
 
 impl VehicleSpec {
+    /// How far the body reaches ahead of the rear axle, m: what its front
+    /// sweeps turning on the spot, and swings out past a corner turned on
+    /// the move.
+    pub fn front_m(&self) -> f64 {
+        self.length_m - self.rear_overhang_m
+    }
+
     /// Distance travelled along the wheel's rim per encoder tick, m.
     pub fn metres_per_tick(&self) -> f64 {
         std::f64::consts::TAU * self.rear_wheel_radius_m / f64::from(self.ticks_per_rev)

@@ -359,8 +359,6 @@ struct ActiveTask {
     started: Stamp,
     queue: VecDeque<Behaviour>,
     current: Option<Behaviour>,
-    /// Loops of a `map_room` survey driven.
-    loops: usize,
     /// A `map_room` loop driven corner to corner.
     legs: Option<Legs>,
     /// Seconds the way has been blocked.
@@ -434,12 +432,6 @@ impl Legs {
             self.replans += 1;
             self.leg(config, est, k)
         })
-    }
-
-    /// Loops driven whole (the first leg only reaches the loop).
-    fn loops(&self) -> usize {
-        self.under_way
-            .map_or(0, |k| k.saturating_sub(1) / self.corners.len().max(1))
     }
 
     /// Leg `leg`: to corner `leg` (modulo their number), arriving faced to
@@ -1227,7 +1219,6 @@ impl Executive {
                             started: now,
                             queue: VecDeque::new(),
                             current: None,
-                            loops: 0,
                             legs: None,
                             blocked_s: 0.0,
                             plaster: None,
@@ -1380,7 +1371,7 @@ impl Executive {
             } => {
                 let g = WallGeometry::of(*wall, est.room_m);
                 let forward = to_m > from_m;
-                let front = self.config.vehicle.length_m - self.config.vehicle.rear_overhang_m;
+                let front = self.config.vehicle.front_m();
                 let room_left = if forward { g.length_m - to_m } else { *to_m };
                 if room_left < front + 0.1 {
                     return Err(format!(
@@ -1496,7 +1487,6 @@ impl Executive {
             started: now,
             queue,
             current: None,
-            loops: 0,
             legs,
             blocked_s: 0.0,
             plaster,
@@ -1581,7 +1571,7 @@ impl Executive {
     /// stands out of a wall (a radiator, a sill), m.
     fn pivot_clearance(&self) -> f64 {
         let v = &self.config.vehicle;
-        (v.length_m - v.rear_overhang_m).hypot(0.5 * v.width_m) + 0.2
+        v.front_m().hypot(0.5 * v.width_m) + 0.2
     }
 
     /// The way onto a pose beside `wall`: to a point `RUN_IN_M` before it,
@@ -2036,7 +2026,6 @@ impl Executive {
                         );
                     }
                     let way = legs.next(&self.config, est).unwrap_or_default();
-                    a.loops = legs.loops();
                     if way.is_empty() {
                         // No clear way to this corner: the next one, next
                         // tick.
@@ -2045,7 +2034,6 @@ impl Executive {
                     a.queue.extend(way);
                 }
                 if a.legs.is_none() && a.current.is_none() && a.queue.is_empty() {
-                    a.loops += 1;
                     if unseen.is_empty() && loose.is_empty() {
                         return TaskStep::Done;
                     }
@@ -2487,7 +2475,7 @@ fn survey_way(
     // What the body reaches toward the furniture beside the loop's long
     // sides (half its width) and at its ends (its front, turning).
     let side = 0.5 * vehicle.width_m + 0.15;
-    let front = vehicle.length_m - vehicle.rear_overhang_m + 0.15;
+    let front = vehicle.front_m() + 0.15;
     let half = if xs >= ys {
         [front, side]
     } else {
@@ -2682,7 +2670,7 @@ const ON_THE_MOVE_SPARE_M: f64 = 0.1;
 /// that far and `ON_THE_MOVE_SPARE_M` more from every wall. A loop in a
 /// furnished bedroom, between the bed and the wall, does not.
 fn turns_on_the_move(corners: &[[f64; 2]], room_m: [f64; 2], vehicle: &VehicleSpec) -> bool {
-    let reach = vehicle.length_m - vehicle.rear_overhang_m + ON_THE_MOVE_SPARE_M;
+    let reach = vehicle.front_m() + ON_THE_MOVE_SPARE_M;
     corners
         .iter()
         .all(|&[x, y]| x.min(room_m[0] - x) >= reach && y.min(room_m[1] - y) >= reach)
@@ -2721,7 +2709,7 @@ fn door_pass(
     speed_mps: f64,
 ) -> Vec<Behaviour> {
     let v = &config.vehicle;
-    let (rear, front) = (v.rear_overhang_m, v.length_m - v.rear_overhang_m);
+    let (rear, front) = (v.rear_overhang_m, v.front_m());
     let g = WallGeometry::of(d.wall, est.room_m);
     let depth = if g.along.x.abs() > 0.5 {
         est.room_m[1]

@@ -137,7 +137,7 @@ impl<'a> Space<'a> {
             obstacles,
             doorways,
             rear_m: vehicle.rear_overhang_m + PLAN_MARGIN_M,
-            front_m: vehicle.length_m - vehicle.rear_overhang_m + PLAN_MARGIN_M,
+            front_m: vehicle.front_m() + PLAN_MARGIN_M,
             half_width_m: 0.5 * vehicle.width_m + safety.lateral_margin_m + PLAN_MARGIN_M,
             run_field_m: field + PLAN_MARGIN_M,
             turn_field_rad: (field + PLAN_MARGIN_M) / vehicle.wheelbase_m,

@@ -45,7 +45,7 @@ impl<'a> Floor<'a> {
             room_m,
             obstacles,
             rear_m: vehicle.rear_overhang_m,
-            front_m: vehicle.length_m - vehicle.rear_overhang_m,
+            front_m: vehicle.front_m(),
             half_width_m: 0.5 * vehicle.width_m,
             clearance_m,
         }

@@ -196,7 +196,7 @@ impl Supervisor {
             sign * cmd.steer_rad.cos(),
             sign * cmd.steer_rad.sin() / v.wheelbase_m,
         );
-        let (back, front) = (-v.rear_overhang_m, v.length_m - v.rear_overhang_m);
+        let (back, front) = (-v.rear_overhang_m, v.front_m());
         let half = 0.5 * v.width_m + c.lateral_margin_m;
         // Poses every 5 cm of travel (and every 3° of turn).
         let steps = ((travel / 0.05).max(travel * turn.abs() / 0.05).ceil() as usize).max(1);

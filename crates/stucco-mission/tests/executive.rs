@@ -1476,7 +1476,7 @@ fn apartment() -> FloorPlan {
 fn body_inside(robot: &Robot, plan: &FloorPlan) -> f64 {
     let origin = plan.rooms()[robot.room.unwrap()].origin_m;
     let s = &robot.spec;
-    let front = s.length_m - s.rear_overhang_m;
+    let front = s.front_m();
     let half = 0.5 * s.width_m;
     let corners = [
         (-s.rear_overhang_m, -half),
@@ -1559,7 +1559,7 @@ fn the_robot_turns_in_a_hall_too_narrow_to_turn_on_the_spot_in() {
 /// every box on its floor, m (negative: into one).
 fn body_clearance(robot: &Robot) -> f64 {
     let s = &robot.spec;
-    let front = s.length_m - s.rear_overhang_m;
+    let front = s.front_m();
     let half = 0.5 * s.width_m;
     // The outline, every 5 cm.
     let outline: Vec<Point2<f64>> = (0..=20)

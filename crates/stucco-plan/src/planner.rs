@@ -378,7 +378,7 @@ struct Body {
 impl Body {
     fn of(v: &VehicleSpec) -> Body {
         Body {
-            x_m: [-v.rear_overhang_m, v.length_m - v.rear_overhang_m],
+            x_m: [-v.rear_overhang_m, v.front_m()],
             half_width_m: v.width_m / 2.0,
         }
     }
@@ -407,7 +407,7 @@ struct Planner<'a> {
 }
 
 /// Cells of the floor the robot can get to, m.
-const FLOOR_CELL_M: f64 = 0.05;
+const REACH_CELL_M: f64 = 0.05;
 
 /// The floor the robot can get to from where it starts: the cells whose
 /// middle is `radius` or more from every wall and obstacle (the robot
@@ -417,21 +417,21 @@ const FLOOR_CELL_M: f64 = 0.05;
 /// way; its plaster is reported unreachable.
 struct Floor {
     cells: [usize; 2],
-    radius_m: f64,
-    reached: Vec<bool>,
+    /// Cells within the passage's radius of a reached one.
+    near: Vec<bool>,
 }
 
 impl Floor {
     fn reached(room: &RoomModel, radius: f64, start: &Pose2) -> Floor {
         let [xs, ys] = room.size_m;
         let cells = [
-            ((xs / FLOOR_CELL_M).ceil() as usize).max(1),
-            ((ys / FLOOR_CELL_M).ceil() as usize).max(1),
+            ((xs / REACH_CELL_M).ceil() as usize).max(1),
+            ((ys / REACH_CELL_M).ceil() as usize).max(1),
         ];
         let centre = |i: usize, j: usize| {
             [
-                (i as f64 + 0.5) * FLOOR_CELL_M,
-                (j as f64 + 0.5) * FLOOR_CELL_M,
+                (i as f64 + 0.5) * REACH_CELL_M,
+                (j as f64 + 0.5) * REACH_CELL_M,
             ]
         };
         let open = |i: usize, j: usize| {
@@ -476,37 +476,35 @@ impl Floor {
                 stack.push(k + cells[0]);
             }
         }
-        Floor {
-            cells,
-            radius_m: radius,
-            reached,
+        // Once here, not at each of the thousands of stations' bases
+        // tried: the cells within `radius` of a reached one.
+        let k = (radius / REACH_CELL_M).ceil() as i64;
+        let [ni, nj] = cells.map(|c| c as i64);
+        let mut near = vec![false; n];
+        for (idx, _) in reached.iter().enumerate().filter(|(_, r)| **r) {
+            let (i, j) = ((idx % cells[0]) as i64, (idx / cells[0]) as i64);
+            for b in (j - k).max(0)..=(j + k).min(nj - 1) {
+                for a in (i - k).max(0)..=(i + k).min(ni - 1) {
+                    let d = (((a - i) * (a - i) + (b - j) * (b - j)) as f64).sqrt() * REACH_CELL_M;
+                    if d <= radius {
+                        near[(b * ni + a) as usize] = true;
+                    }
+                }
+            }
         }
+        Floor { cells, near }
     }
 
     /// True when the robot can get to `p` (its rear axle there): a reached
-    /// cell lies within the passage's radius of it (a station stands
+    /// cell lies within the passage's radius of its cell (a station stands
     /// nearer a wall, or a corner, than the way it came by is wide).
     fn reaches(&self, p: [f64; 2]) -> bool {
-        let r = self.radius_m;
-        let k = (r / FLOOR_CELL_M).ceil() as i64 + 1;
         let (i, j) = (
-            (p[0] / FLOOR_CELL_M).floor() as i64,
-            (p[1] / FLOOR_CELL_M).floor() as i64,
+            (p[0] / REACH_CELL_M).floor() as i64,
+            (p[1] / REACH_CELL_M).floor() as i64,
         );
         let [ni, nj] = self.cells.map(|c| c as i64);
-        (-k..=k).any(|di| {
-            (-k..=k).any(|dj| {
-                let (a, b) = (i + di, j + dj);
-                let (x, y) = (
-                    (a as f64 + 0.5) * FLOOR_CELL_M,
-                    (b as f64 + 0.5) * FLOOR_CELL_M,
-                );
-                (0..ni).contains(&a)
-                    && (0..nj).contains(&b)
-                    && self.reached[(b * ni + a) as usize]
-                    && (x - p[0]).hypot(y - p[1]) <= r
-            })
-        })
+        (0..ni).contains(&i) && (0..nj).contains(&j) && self.near[(j * ni + i) as usize]
     }
 }
 
