@@ -377,6 +377,11 @@ struct ActiveTask {
 #[derive(Clone, Debug)]
 struct Legs {
     corners: Vec<[f64; 2]>,
+    /// A survey's loop: its corners are fitted again, as each leg starts,
+    /// to what the laser has found on the floor by then (a column in a
+    /// corner seen only once the loop is under way), with the margins and
+    /// the body's reach of `survey_rect`. None: a mission's own corners.
+    refit: Option<([f64; 2], [f64; 2])>,
     /// Legs to drive in all; none: round and round until the task ends.
     count: Option<usize>,
     /// The leg under way (the first to the first corner); none before it.
@@ -392,6 +397,7 @@ impl Legs {
     fn new(corners: Vec<[f64; 2]>, count: Option<usize>, speed_mps: f64) -> Legs {
         Legs {
             corners,
+            refit: None,
             count,
             under_way: None,
             replans: 0,
@@ -415,6 +421,11 @@ impl Legs {
         }
         self.under_way = Some(next);
         self.replans = 0;
+        if let Some((margins, half)) = self.refit
+            && let Some(corners) = survey_rect(est, margins, half, SURVEY_LEGS_MIN_M)
+        {
+            self.corners = corners.to_vec();
+        }
         let way = self.leg(config, est, next);
         self.unreached = if way.is_empty() {
             self.unreached + 1
@@ -2497,16 +2508,18 @@ fn survey_way(
         way.push(Behaviour::path(&config.gains, path, speed));
         return (way, None);
     }
-    let near = SURVEY_LEG_STANDOFF_M;
-    let Some(corners) = survey_rect(est, [near, near], [side, side], 0.3) else {
+    let fit = ([SURVEY_LEG_STANDOFF_M; 2], [side, side]);
+    let Some(corners) = survey_rect(est, fit.0, fit.1, SURVEY_LEGS_MIN_M) else {
         return (Vec::new(), None);
     };
     // Corner to corner, stopping at each: to the first, then round to it.
-    (
-        Vec::new(),
-        Some(Legs::new(corners.to_vec(), Some(corners.len() + 1), speed)),
-    )
+    let mut legs = Legs::new(corners.to_vec(), Some(corners.len() + 1), speed);
+    legs.refit = Some(fit);
+    (Vec::new(), Some(legs))
 }
+
+/// Shortest side of a survey loop driven corner to corner, m.
+const SURVEY_LEGS_MIN_M: f64 = 0.3;
 
 /// Sides shorter than this make the survey loop, turned on the move, too
 /// small to see a window whole (a kitchen's 0.4 m): it is driven corner to

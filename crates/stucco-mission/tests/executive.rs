@@ -1651,6 +1651,68 @@ fn the_robot_plasters_a_kitchen_with_a_counter_along_one_wall_and_a_column_in_a_
 }
 
 #[test]
+fn a_survey_driven_corner_to_corner_moves_its_corners_off_a_column_found_under_way() {
+    // The kitchen again, but the column in its north-east corner is not
+    // yet in the floor map when the survey starts (the laser had not
+    // looked that way): it appears once the first leg is under way. The
+    // loop's north-east corner, fitted before, stands in it. The survey
+    // still faces the east wall: it drives the loop's east side heading
+    // south, its corners fitted again to the map as each leg starts.
+    let tool = stucco_plan::SprayTool::default();
+    let mut cfg = config(true);
+    cfg.spray = Some(tool);
+    cfg.safety.obstacle_margin_m = 0.03;
+    cfg.safety.lateral_margin_m = 0.02;
+    let mut exec = Executive::new(cfg, vec![plaster(true)]);
+    let mut robot = Robot::at(Pose2::new(1.45, 2.0, -std::f64::consts::FRAC_PI_2));
+    robot.room_m = [2.85, 2.85];
+    let counter = stucco_plan::Obstacle {
+        min_m: [0.0, 0.0],
+        max_m: [2.85, 0.75],
+        height_m: 1.0,
+    };
+    let column = stucco_plan::Obstacle {
+        min_m: [2.25, 2.2],
+        max_m: [2.85, 2.85],
+        height_m: 1.0,
+    };
+    robot.floor = vec![counter];
+    let (mut plans, mut seen_since) = (0, None);
+    // Seconds the camera (looking left) faced the east wall from the
+    // loop's east side, squarely enough for the window finder.
+    let mut facing_east_s = 0.0;
+    let mut closest = f64::INFINITY;
+    for _ in 0..(1500.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        plans += out
+            .events
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::PlanMade { .. }))
+            .count();
+        if plans == 1 && seen_since.is_none() {
+            seen_since = Some(robot.now);
+        }
+        if seen_since.is_some_and(|t| robot.now.seconds_since(t) > 5.0) && robot.floor.len() == 1 {
+            robot.floor.push(column);
+        }
+        robot.drive(out.drive);
+        closest = closest.min(body_clearance(&robot));
+        let heading_south = (robot.pose.theta + std::f64::consts::FRAC_PI_2).abs() < 0.45;
+        if plans == 1 && heading_south && robot.pose.x > 1.5 {
+            facing_east_s += DT;
+        }
+        if plans >= 2 || exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(robot.floor.len(), 2, "the column was never added");
+    assert!(plans >= 2, "no plan after the survey: {:?}", exec.status());
+    println!("facing the east wall: {facing_east_s:.1} s; closest {closest:.3} m");
+    assert!(facing_east_s > 2.0, "{facing_east_s} s");
+    assert!(closest >= 0.01, "{closest}");
+}
+
+#[test]
 fn a_map_room_loop_no_clear_way_reaches_fails_saying_so_without_moving_into_anything() {
     // A loop near the walls (driven corner to corner), every corner of it
     // taken by furniture: the task fails naming why, the robot where it
