@@ -25,6 +25,10 @@ pub struct SprayerSpec {
     pub cell_m: f64,
     /// Where the nozzle is parked at the start, robot frame, m.
     pub park_m: [f64; 3],
+    /// A range camera on the carriage beside the nozzle, if it carries
+    /// one: its profiles are taken from where the nozzle truly is.
+    #[serde(default)]
+    pub camera: Option<crate::CameraSpec>,
 }
 
 /// What a true surface is.

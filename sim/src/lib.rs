@@ -44,7 +44,7 @@ pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, Tr
 pub use plane::{PlaneCaster, ray_circle};
 pub use scene::Scene;
 pub use sensors::cast;
-pub use sensors::{CameraSpec, FaultConfig, Interval, StuckEncoder};
+pub use sensors::{CameraSpec, FaultConfig, Interval, StuckEncoder, TOOL_CAMERA};
 pub use simulator::{SimConfig, Simulator, Truth};
 pub use tour::TourDriver;
 pub use trace::TraceHash;

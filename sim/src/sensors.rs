@@ -87,6 +87,21 @@ pub struct CameraSpec {
     pub max_range_m: f64,
 }
 
+impl CameraSpec {
+    /// A camera on the spray tool's carriage, beside the nozzle, looking
+    /// left at the wall the nozzle sprays: it profiles the wall before
+    /// plaster is laid on it (its height is the nozzle's).
+    pub fn on_tool() -> Self {
+        CameraSpec {
+            name: TOOL_CAMERA.to_owned(),
+            ..CameraSpec::default()
+        }
+    }
+}
+
+/// The sensor id of the camera on the spray tool.
+pub const TOOL_CAMERA: &str = "tool-camera";
+
 impl Default for CameraSpec {
     /// Looking left, from 35° below the horizontal to straight up, 20
     /// profiles a second (a line scanner turned on its side).
@@ -359,14 +374,22 @@ impl CameraRig {
         }
     }
 
-    /// The profiles due before `t1_ns` from a robot at `pose`.
+    /// Its spec.
+    pub fn spec(&self) -> &CameraSpec {
+        &self.spec
+    }
+
+    /// The profiles due before `t1_ns` from a robot at `pose`, the sensor
+    /// at `origin_m` in the robot's frame.
     pub fn shoot(
         &mut self,
         scene: &Scene,
         t1_ns: i64,
         pose: &Pose2,
+        origin_m: [f64; 3],
         rng: &mut impl Rng,
     ) -> Vec<RangeProfile> {
+        let at = pose.transform_point(&nalgebra::Point2::new(origin_m[0], origin_m[1]));
         let mut out = Vec::new();
         let noise = Normal::new(0.0, self.spec.range_sigma_m.max(1e-12)).ok();
         while self.next_ns < t1_ns {
@@ -383,7 +406,7 @@ impl CameraRig {
                 .iter()
                 .map(|&el| {
                     let dir = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
-                    match cast(scene, [pose.x, pose.y, s.height_m], dir, s.max_range_m) {
+                    match cast(scene, [at.x, at.y, origin_m[2]], dir, s.max_range_m) {
                         Some(r) => r + noise.map_or(0.0, |n| n.sample(rng)),
                         None => f64::INFINITY,
                     }
@@ -392,6 +415,7 @@ impl CameraRig {
             out.push(RangeProfile {
                 stamp: Stamp::from_nanos(self.next_ns),
                 sensor: s.name.clone(),
+                origin_m,
                 azimuth_rad: s.azimuth_rad,
                 elevations_rad: elevations,
                 ranges_m: ranges,

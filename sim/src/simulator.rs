@@ -55,6 +55,9 @@ impl Default for SimConfig {
     }
 }
 
+/// Mixed into the run's seed for the tool camera's noise.
+const TOOL_CAMERA_SEED: u64 = 0x7001_ca3e_7a00_0001;
+
 /// The truth about the robot, for tests and reports only.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Truth {
@@ -75,6 +78,9 @@ pub struct Simulator {
     drive: Drive,
     laser: LaserRig,
     camera: Option<CameraRig>,
+    /// The camera on the sprayer's carriage, with its own noise (so that
+    /// carrying it leaves every other sensor's draws as they were).
+    tool_camera: Option<(CameraRig, ChaCha8Rng)>,
     faults: FaultConfig,
     rng: ChaCha8Rng,
     step_ns: i64,
@@ -94,7 +100,8 @@ pub struct Simulator {
 impl Simulator {
     /// A simulation of `world` with `config`; `seed` overrides the world's.
     pub fn new(world: &WorldSpec, config: SimConfig, seed: Option<u64>) -> Simulator {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed.unwrap_or(world.seed));
+        let seed = seed.unwrap_or(world.seed);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let layout = Layout::of(world);
         let start = Pose2::new(
             world.robot.at[0],
@@ -110,6 +117,16 @@ impl Simulator {
                 PlaneCaster::new(&layout, config.vehicle.laser_height_m),
             ),
             camera: config.camera.clone().map(CameraRig::new),
+            tool_camera: config
+                .sprayer
+                .as_ref()
+                .and_then(|s| s.camera.clone())
+                .map(|c| {
+                    (
+                        CameraRig::new(c),
+                        ChaCha8Rng::seed_from_u64(seed ^ TOOL_CAMERA_SEED),
+                    )
+                }),
             drive: Drive::new(config.vehicle.clone(), config.dynamics.clone(), start),
             faults: config.faults,
             scene,
@@ -209,8 +226,14 @@ impl Simulator {
             self.delayed.push_back((due, scan));
         }
         if let Some(cam) = &mut self.camera {
+            let origin = [0.0, 0.0, cam.spec().height_m];
             out.profiles
-                .extend(cam.shoot(&self.scene, t1, &pose, &mut self.rng));
+                .extend(cam.shoot(&self.scene, t1, &pose, origin, &mut self.rng));
+        }
+        if let (Some((cam, rng)), Some(d)) = (&mut self.tool_camera, &self.deposition) {
+            let origin = d.state().nozzle_m;
+            out.profiles
+                .extend(cam.shoot(&self.scene, t1, &pose, origin, rng));
         }
         while self.next_odometry_ns <= t1 {
             let stamp = Stamp::from_nanos(self.next_odometry_ns);

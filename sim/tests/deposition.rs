@@ -5,7 +5,9 @@
 
 use std::path::Path;
 use stucco_core::{Aim, DriveCommand, Platform, ToolCommand};
-use stucco_sim::{Coat, SimConfig, Simulator, SprayerSpec, SurfaceKind, WorldSpec};
+use stucco_sim::{
+    CameraSpec, Coat, SimConfig, Simulator, SprayerSpec, SurfaceKind, TOOL_CAMERA, WorldSpec,
+};
 
 const FLOW_M3PS: f64 = 10.0 / 60_000.0;
 
@@ -13,6 +15,10 @@ const FLOW_M3PS: f64 = 10.0 / 60_000.0;
 /// west: the wall (and its window, x 1.8–3.2 m, 0.9–2.1 m high) on the
 /// left.
 fn sim() -> Simulator {
+    sim_with(None)
+}
+
+fn sim_with(camera: Option<CameraSpec>) -> Simulator {
     let path = format!("{}/worlds/apartment.toml", env!("CARGO_MANIFEST_DIR"));
     let mut w = WorldSpec::load(Path::new(&path)).unwrap();
     w.robot.at = [3.0, 0.7];
@@ -26,6 +32,7 @@ fn sim() -> Simulator {
             axis_speed_mps: 0.5,
             cell_m: 0.01,
             park_m: [0.3, 0.0, 1.0],
+            camera,
         }),
         ..SimConfig::default()
     };
@@ -174,4 +181,49 @@ fn the_ceiling_takes_what_is_sprayed_up() {
         .pose
         .transform_point(&nalgebra::Point2::new(0.3, 0.0));
     assert!((centre[0] - p.x).abs() < 1e-3 && (centre[1] - p.y).abs() < 1e-3);
+}
+
+#[test]
+fn the_camera_on_the_tool_looks_from_where_the_nozzle_is() {
+    // Facing west 0.7 m off the living room's south wall, the nozzle
+    // 0.3 m off the wall in front of its window (x 1.8–3.2 m, sill 0.9 m,
+    // head 2.1 m), 0.8 m up: the tool's camera meets the wall below the
+    // sill at the nozzle's standoff and looks through the window above.
+    let mut s = sim_with(Some(CameraSpec::on_tool()));
+    s.tool(ToolCommand {
+        nozzle_m: [0.3, 0.4, 0.8],
+        aim: Aim::Left,
+        spray: false,
+    });
+    s.advance(2.0);
+    let p = loop {
+        let r = s.advance(0.05);
+        if let Some(p) = r.profiles.into_iter().find(|p| p.sensor == TOOL_CAMERA) {
+            break p;
+        }
+    };
+    assert_eq!(p.origin_m, [0.3, 0.4, 0.8]);
+    let range_at = |el: f64| {
+        let i = p
+            .elevations_rad
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - el).abs().total_cmp(&(b.1 - el).abs()))
+            .unwrap()
+            .0;
+        (p.elevations_rad[i], p.ranges_m[i])
+    };
+    let (el, r) = range_at(0.0);
+    assert!((r * el.cos() - 0.3).abs() < 0.04, "{r} at {el}");
+    // Aimed at 1.5 m on the wall: into the window, past its reveal.
+    let (el, r) = range_at((0.7_f64 / 0.3).atan());
+    assert!(!r.is_finite() || r * el.cos() > 0.3 + 0.35, "{r} at {el}");
+    // The camera on the body is where it always was.
+    let body = loop {
+        let r = s.advance(0.05);
+        if let Some(p) = r.profiles.into_iter().find(|p| p.sensor != TOOL_CAMERA) {
+            break p;
+        }
+    };
+    assert_eq!(body.origin_m, [0.0, 0.0, CameraSpec::default().height_m]);
 }

@@ -13,7 +13,7 @@ use stucco_nav::{
     find_doors_moving, sensor_twist, twist_at,
 };
 use stucco_plan::Obstacle;
-use stucco_sim::CameraSpec;
+use stucco_sim::{CameraSpec, TOOL_CAMERA};
 use stucco_sim::{Layout, SimConfig, Simulator, SprayerSpec, WorldSpec};
 
 /// Control period, s.
@@ -38,6 +38,9 @@ pub struct Navigator {
     scans: u64,
     /// The range camera, if the robot has one.
     camera: Option<CameraSpec>,
+    /// The executive is looking at a wall with the camera on the spray
+    /// tool.
+    tool_look: bool,
     /// What the robot knows of the room it is in.
     room: RoomView,
     /// The floor plan, the room of it the robot is in, and how far off
@@ -62,6 +65,10 @@ struct RoomView {
     windows: [WindowFinder; 4],
     /// The wall the camera looked at last.
     camera_wall: Option<usize>,
+    /// Windows found in each room wall by the camera on the spray tool.
+    tool_windows: [WindowFinder; 4],
+    /// The wall the tool's camera looked at last.
+    tool_wall: Option<usize>,
     /// Heights of the ceiling the camera measured, m (the latest).
     ceiling_m: std::collections::VecDeque<f64>,
     /// Scan echoes off the walls, counted in cells of the room frame.
@@ -107,6 +114,8 @@ impl RoomView {
             camera_walls_seen: [0; 4],
             windows: std::array::from_fn(|_| WindowFinder::new(WindowConfig::default())),
             camera_wall: None,
+            tool_windows: std::array::from_fn(|_| WindowFinder::new(WindowConfig::default())),
+            tool_wall: None,
             ceiling_m: std::collections::VecDeque::new(),
             floor: std::collections::BTreeMap::new(),
             floor_boxes: Vec::new(),
@@ -148,6 +157,11 @@ const LASER_SEES_WALL: usize = 20;
 const CAMERA_WALL_RAYS: usize = 8;
 /// σ of the camera's distance to a wall, m (its rays' median).
 const CAMERA_WALL_SIGMA_M: f64 = 0.01;
+
+/// A look of the tool's camera starting this near where the last one on
+/// the same wall ended goes on with it, m: the next station's reach
+/// overlaps the last one's by up to half a metre.
+const TOOL_LOOK_JOIN_M: f64 = 0.5;
 
 /// Smallest cosine between the camera's fan and a wall's normal for the
 /// profile to count for that wall.
@@ -214,6 +228,7 @@ impl Navigator {
             discover_doors: false,
             scans: 0,
             camera,
+            tool_look: false,
             room: RoomView::new(RoomEkf::new(
                 RoomEkfConfig::new(odometry, vehicle.laser_mount),
                 x0,
@@ -410,6 +425,7 @@ impl Navigator {
             windows: self
                 .windows()
                 .into_iter()
+                .chain(self.windows_seen_in_part())
                 .map(|(wall, w)| WindowEstimate {
                     wall,
                     along_m: w.along_m,
@@ -646,6 +662,27 @@ impl Navigator {
         room_windows(&self.room)
     }
 
+    /// Windows the tool's camera is seeing from one edge on, as far as it
+    /// has seen them, where no window is known: the executive keeps
+    /// plaster out of them before they are seen whole.
+    fn windows_seen_in_part(&self) -> Vec<(WallName, Window)> {
+        let known = self.windows();
+        WallName::ALL
+            .iter()
+            .flat_map(|&w| {
+                self.room.tool_windows[w.index()]
+                    .seen_in_part()
+                    .into_iter()
+                    .map(move |x| (w, x))
+            })
+            .filter(|(w, x)| {
+                !known.iter().any(|(k, f)| {
+                    k == w && f.along_m[0] < x.along_m[1] && x.along_m[0] < f.along_m[1]
+                })
+            })
+            .collect()
+    }
+
     /// A window of `wall` in the room the robot is in, found before (a
     /// checkpoint kept it).
     pub fn add_known_window(&mut self, wall: WallName, window: Window) {
@@ -668,13 +705,15 @@ impl Navigator {
     /// at (on the estimate at hand); a change of wall ends the last one's
     /// pass.
     fn look_for_windows(&mut self, profile: &stucco_core::RangeProfile) {
-        let Some(cam_height_m) = self.camera.as_ref().map(|c| c.height_m) else {
+        let on_tool = profile.sensor == TOOL_CAMERA;
+        if (on_tool && !self.tool_look) || (!on_tool && self.camera.is_none()) {
             return;
-        };
+        }
         let est = self.mission_estimate();
         let a = est.pose.theta + profile.azimuth_rad;
         let h = nalgebra::Vector2::new(a.cos(), a.sin());
-        let p = est.pose.position().coords;
+        let [x, y, cam_height_m] = profile.origin_m;
+        let p = est.pose.transform_point(&Point2::new(x, y)).coords;
         let target = WallName::ALL.iter().find_map(|&w| {
             let g = WallGeometry::of(w, est.room_m);
             let toward = -h.dot(&g.inward);
@@ -690,6 +729,10 @@ impl Navigator {
                 )
             })
         });
+        if on_tool {
+            self.tool_look_at(profile, target);
+            return;
+        }
         let now = target.map(|t| t.0);
         if let Some(last) = self.room.camera_wall
             && now != Some(last)
@@ -711,6 +754,41 @@ impl Navigator {
             }
             self.room.windows[w].add(profile, &pose);
         }
+    }
+
+    /// Hands a profile of the camera on the spray tool to the window
+    /// finder of the wall it faces. One look takes up where the last one
+    /// ended when it goes on from there along the same wall (the sweeps
+    /// of a lane's stations follow one another, so a window wider than
+    /// one station's reach is seen whole); anywhere else it starts anew.
+    fn tool_look_at(
+        &mut self,
+        profile: &stucco_core::RangeProfile,
+        target: Option<(usize, ProfilePose)>,
+    ) {
+        let Some((w, pose)) = target else {
+            return;
+        };
+        let along = pose.along_m + pose.direction.y * pose.distance_m / pose.direction.x;
+        let joins = self.room.tool_wall == Some(w)
+            && self.room.tool_windows[w]
+                .last_along_m()
+                .is_none_or(|l| (l - along).abs() <= TOOL_LOOK_JOIN_M);
+        if !joins {
+            if let Some(last) = self.room.tool_wall {
+                self.room.tool_windows[last].end_pass();
+            }
+            self.room.tool_windows[w].end_pass();
+        }
+        self.room.tool_wall = Some(w);
+        self.room.tool_windows[w].add(profile, &pose);
+    }
+
+    /// Whether the camera on the spray tool is looking at the wall before
+    /// it is sprayed (the executive's look): its profiles are used only
+    /// then, not while the nozzle sprays or travels.
+    pub fn tool_look(&mut self, on: bool) {
+        self.tool_look = on;
     }
 
     /// The wall the camera faces, when the laser has not seen it, measured
@@ -836,14 +914,31 @@ impl Navigator {
 }
 
 /// The windows found in `view`'s room, wall by wall.
+/// The windows of `view`, wall by wall: those the camera on the body
+/// found, their edges along the wall those the camera on the tool saw
+/// from the nozzle's standoff where it saw them too (their sill and head
+/// stay the body camera's, measured from farther off, square to them),
+/// and those only the tool's camera found.
 fn room_windows(view: &RoomView) -> Vec<(WallName, Window)> {
     WallName::ALL
         .iter()
         .flat_map(|&w| {
-            view.windows[w.index()]
-                .windows()
-                .iter()
-                .map(move |x| (w, *x))
+            let mut found: Vec<Window> = view.windows[w.index()].windows().to_vec();
+            for t in view.tool_windows[w.index()].windows() {
+                match found.iter_mut().find(|f| {
+                    f.along_m[0] < t.along_m[1]
+                        && t.along_m[0] < f.along_m[1]
+                        && f.sill_head_m[0] < t.sill_head_m[1]
+                        && t.sill_head_m[0] < f.sill_head_m[1]
+                }) {
+                    Some(f) => {
+                        f.along_m = t.along_m;
+                        f.observations += t.observations;
+                    }
+                    None => found.push(*t),
+                }
+            }
+            found.into_iter().map(move |x| (w, x))
         })
         .collect()
 }

@@ -27,6 +27,7 @@ pub fn sprayer_of(tool: &SprayTool) -> SprayerSpec {
         axis_speed_mps: tool.axis_speed_mps,
         cell_m: COAT_CELL_M,
         park_m: stucco_mission::PARK_NOZZLE_M,
+        camera: tool.camera.then(stucco_sim::CameraSpec::on_tool),
     }
 }
 

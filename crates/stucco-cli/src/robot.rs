@@ -182,6 +182,7 @@ pub fn run_robot(job: &RobotJob, stop: &Arc<AtomicBool>) -> Result<RobotRun> {
             tracing::warn!(robot = %job.name, door, "the robot's frame stays: {why}");
         }
         nav.tool(out.tool);
+        nav.tool_look(out.tool_look);
         bumper = nav.drive(out.drive);
         step += 1;
         // Paced: simulated time runs `speed` times the wall clock. Until the

@@ -789,6 +789,7 @@ fn run_once(
             });
         }
         nav.tool(out_.tool);
+        nav.tool_look(out_.tool_look);
         if exec.mode().is_final() {
             break;
         }

@@ -45,6 +45,11 @@ pub struct RangeProfile {
     pub stamp: Stamp,
     /// The sensor it came from.
     pub sensor: String,
+    /// Where the sensor was in the robot's frame when it took the profile
+    /// (x forward of the rear axle, y to the left, z up from the floor),
+    /// m: a camera on the body stays put, one on the spray tool's carriage
+    /// moves with it (its axes' encoders tell where).
+    pub origin_m: [f64; 3],
     /// Heading of the fan's plane in the robot's frame, rad (π/2: to the
     /// left).
     pub azimuth_rad: f64,

@@ -288,6 +288,17 @@ impl RobotLink {
         let publisher = |k: String| -> Result<Publisher<'static>, LinkError> {
             session.declare_publisher(k).express(true).wait().map_err(z)
         };
+        // Replies and events are the operator's record of what the robot
+        // did: queued, never dropped, when the link is congested (zenoh
+        // drops a publisher's samples by default).
+        let record = |k: String| -> Result<Publisher<'static>, LinkError> {
+            session
+                .declare_publisher(k)
+                .express(true)
+                .congestion_control(zenoh::qos::CongestionControl::Block)
+                .wait()
+                .map_err(z)
+        };
         Ok(RobotLink {
             name: name.to_owned(),
             cmd: session
@@ -299,9 +310,9 @@ impl RobotLink {
                 .wait()
                 .map_err(z)?,
             pending: Vec::new(),
-            acks: publisher(keys::acks(name))?,
+            acks: record(keys::acks(name))?,
             state: publisher(keys::state(name))?,
-            events: publisher(keys::events(name))?,
+            events: record(keys::events(name))?,
             map: publisher(keys::map(name))?,
             // Scans are many and soon stale: dropped rather than queued
             // when the network is congested.

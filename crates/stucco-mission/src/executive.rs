@@ -34,6 +34,19 @@ const REALIGN_M: f64 = 1.0;
 /// door, m.
 const DOOR_SILL_M: f64 = 0.1;
 
+/// Lowest height on the wall the aim runs at while the tool's camera
+/// looks, m: its fan (35° below the horizontal to straight up) meets the
+/// wall from 20 cm under it to the ceiling, past every sill above 0.6 m.
+/// Behind furniture the look runs where the strokes start, above it.
+const LOOK_HEIGHT_M: f64 = 0.8;
+/// Speed of the aim along the wall while the tool's camera looks, m/s
+/// (the axes' fastest): a profile every 2.5 cm at 20 a second, a window's
+/// edge placed within half that.
+const LOOK_SPEED_MPS: f64 = 0.5;
+/// How far past what a station's passes reach on its wall the look runs
+/// (as far as the rail goes), m.
+const LOOK_SPARE_M: f64 = 0.15;
+
 /// Where the nozzle waits while the robot drives, robot frame, m: over
 /// the body.
 pub const PARK_NOZZLE_M: [f64; 3] = [0.3, 0.0, 1.2];
@@ -234,6 +247,20 @@ pub enum EventKind {
         /// Its heading from the station's, rad.
         heading_off_rad: f64,
     },
+    /// The camera on the tool found a window the plan did not know, at a
+    /// station: the plan keeps it out of the coat from that station on.
+    WindowFound {
+        /// The task.
+        task: usize,
+        /// The station.
+        station: usize,
+        /// The wall.
+        wall: String,
+        /// Its edges along the wall, m.
+        along_m: [f64; 2],
+        /// Its sill and head, m.
+        sill_head_m: [f64; 2],
+    },
     /// A surface's pass at a station is sprayed.
     PassDone {
         /// The task.
@@ -305,6 +332,10 @@ pub struct Outputs {
     /// navigation core should move its frame to the room beyond it (the
     /// task waits for the estimate to say so).
     pub enter_room: Option<usize>,
+    /// The camera on the spray tool is looking along a wall before it is
+    /// sprayed: its profiles are to be searched for windows now (not while
+    /// the nozzle sprays or travels).
+    pub tool_look: bool,
 }
 
 /// The executive's settings.
@@ -814,6 +845,11 @@ impl Executive {
             && self.hazard.is_none()
             && !inputs.estop;
         let tool = if spraying { self.tool } else { self.tool.off() };
+        let tool_look = self
+            .active
+            .as_ref()
+            .and_then(|a| a.plaster.as_ref())
+            .is_some_and(|r| matches!(r.phase, Phase::Looking { left_s, .. } if left_s == 0.0));
         Outputs {
             drive,
             tool,
@@ -821,6 +857,7 @@ impl Executive {
             checkpoint_due,
             acks: std::mem::take(&mut self.acks),
             enter_room: self.enter_room.take(),
+            tool_look,
         }
     }
 
@@ -1810,6 +1847,79 @@ impl Executive {
                         heading_off_rad: off.theta,
                     },
                 });
+                let looks = run.plan.tool.camera
+                    && run.look(station, LOOK_SPARE_M, LOOK_HEIGHT_M).is_some();
+                run.phase = if looks {
+                    Phase::Looking {
+                        left_s: -1.0,
+                        t_s: 0.0,
+                    }
+                } else {
+                    Phase::Positioning { left_s: -1.0 }
+                };
+                TaskStep::Drive(DriveCommand::STOP)
+            }
+            Phase::Looking { left_s, t_s } => {
+                let station = run.cursor.station;
+                let Some((surface, [u0, u1], v)) = run.look(station, LOOK_SPARE_M, LOOK_HEIGHT_M)
+                else {
+                    run.phase = Phase::Positioning { left_s: -1.0 };
+                    return TaskStep::Drive(DriveCommand::STOP);
+                };
+                let sweep_s = (u1 - u0).abs() / LOOK_SPEED_MPS;
+                let u = u0 + (u1 - u0) * (t_s / sweep_s.max(1e-9)).clamp(0.0, 1.0);
+                let Some(aim) = run.nozzle_for(surface, [u, v], &est.pose, false) else {
+                    run.phase = Phase::Positioning { left_s: -1.0 };
+                    return TaskStep::Drive(DriveCommand::STOP);
+                };
+                if left_s != 0.0 {
+                    // To the look's start first, as to a pass's.
+                    let left_s = if left_s < 0.0 {
+                        let far = (0..3)
+                            .map(|k| (aim.nozzle_m[k] - self.tool.nozzle_m[k]).abs())
+                            .fold(0.0, f64::max);
+                        far / run.plan.tool.axis_speed_mps + NOZZLE_SETTLE_S
+                    } else {
+                        left_s - dt
+                    };
+                    self.tool = aim;
+                    run.phase = Phase::Looking {
+                        left_s: if left_s > 0.0 { left_s } else { 0.0 },
+                        t_s: 0.0,
+                    };
+                    return TaskStep::Drive(DriveCommand::STOP);
+                }
+                self.tool = aim;
+                if t_s < sweep_s {
+                    run.phase = Phase::Looking {
+                        left_s: 0.0,
+                        t_s: t_s + dt,
+                    };
+                    return TaskStep::Drive(DriveCommand::STOP);
+                }
+                // Looked: windows the plan does not know are kept out of
+                // this station's coat and the rest of the wall's.
+                if let SurfaceId::Wall(wall) = surface {
+                    for w in est
+                        .windows
+                        .iter()
+                        .filter(|w| w.wall == wall && w.sill_head_m[0] >= DOOR_SILL_M)
+                    {
+                        if run.plan.add_window(wall, w.along_m, w.sill_head_m, station) {
+                            self.events.push(Event {
+                                stamp: now,
+                                kind: EventKind::WindowFound {
+                                    task: index,
+                                    station,
+                                    wall: surface_name(surface),
+                                    along_m: w.along_m,
+                                    sill_head_m: w.sill_head_m,
+                                },
+                            });
+                            run.digest = plan_digest(&run.plan);
+                        }
+                    }
+                }
                 run.phase = Phase::Positioning { left_s: -1.0 };
                 TaskStep::Drive(DriveCommand::STOP)
             }
@@ -2585,9 +2695,20 @@ fn survey_rect(
                 (2, o.max_m[1] + half_y, y1 - (o.max_m[1] + half_y)),
                 (3, o.min_m[1] - half_y, (o.min_m[1] - half_y) - y0),
             ];
+            // On the robot's side of it, when it stands clear of it one
+            // way or the other (a piece across the whole room leaves no
+            // way to the other side).
+            let p = est.pose.position();
+            let robots_side = |side: usize| match side {
+                0 => p.x > o.max_m[0],
+                1 => p.x < o.min_m[0],
+                2 => p.y > o.max_m[1],
+                _ => p.y < o.min_m[1],
+            };
+            let any_side = cuts.iter().any(|c| c.2 > 0.0 && robots_side(c.0));
             moves.extend(
                 cuts.into_iter()
-                    .filter(|c| c.2 > 0.0)
+                    .filter(|c| c.2 > 0.0 && (!any_side || robots_side(c.0)))
                     .map(|(side, at, left)| {
                         let loss = if side < 2 {
                             (w - left) * h

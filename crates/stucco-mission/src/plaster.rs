@@ -93,6 +93,10 @@ pub(crate) enum Phase {
     Moving,
     /// Standing, letting the estimate settle, since then.
     Settling { left_s: f64 },
+    /// The camera on the tool looking along the station's wall, spray
+    /// off: the nozzle travelling to the look's start (`left_s` to go),
+    /// then sweeping, `t_s` into it.
+    Looking { left_s: f64, t_s: f64 },
     /// The nozzle travelling to the pass's first point, spray off.
     Positioning { left_s: f64 },
     /// In the cursor's move, this far into it.
@@ -281,6 +285,66 @@ impl PlasterRun {
     /// beginning, or where a resumed run takes it up), spray off.
     pub fn first_point(&self, est: &Estimate) -> Option<ToolCommand> {
         self.command(self.resume_s, est).map(ToolCommand::off)
+    }
+
+    /// The look at station `k`'s wall before it is sprayed: the wall,
+    /// from where to where along it the aim runs (what its passes there
+    /// reach, and `spare_m` more either way), toward the next station on
+    /// the wall (or on from the last one), so that one station's look
+    /// takes up where the last one's ended, and the height it runs at: at
+    /// least `height_m`, and nowhere below where the station's strokes
+    /// start (above what stands in front of the wall). None: no wall at
+    /// station `k`.
+    pub fn look(
+        &self,
+        k: usize,
+        spare_m: f64,
+        height_m: f64,
+    ) -> Option<(SurfaceId, [f64; 2], f64)> {
+        // Where each stroke (a run of sprayed moves at one place along the
+        // wall, by the millimetre) starts from below.
+        let mut lowest = std::collections::BTreeMap::<i64, f64>::new();
+        for m in self
+            .plan
+            .stations
+            .get(k)?
+            .passes
+            .iter()
+            .filter(|p| !matches!(p.surface, SurfaceId::Ceiling))
+            .flat_map(|p| p.moves.iter().filter(|m| m.spray))
+        {
+            let low = m.from_m[1].min(m.to_m[1]);
+            for u in [m.from_m[0], m.to_m[0]] {
+                let e = lowest.entry((u * 1000.0).round() as i64).or_insert(low);
+                *e = e.min(low);
+            }
+        }
+        let height_m = lowest.values().copied().fold(height_m, f64::max);
+        let span = |k: usize, id: Option<SurfaceId>| -> Option<(SurfaceId, [f64; 2])> {
+            let st = self.plan.stations.get(k)?;
+            let pass = st.passes.iter().find(|p| {
+                !matches!(p.surface, SurfaceId::Ceiling) && id.is_none_or(|i| i == p.surface)
+            })?;
+            let us = pass.moves.iter().flat_map(|m| [m.from_m[0], m.to_m[0]]);
+            let (lo, hi) = us.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), u| {
+                (a.min(u), b.max(u))
+            });
+            Some((pass.surface, [lo, hi]))
+        };
+        let (id, [lo, hi]) = span(k, None)?;
+        let length = self.plan.surface(id)?.size_m()[0];
+        let (lo, hi) = ((lo - spare_m).max(0.0), (hi + spare_m).min(length));
+        let mid = |s: [f64; 2]| 0.5 * (s[0] + s[1]);
+        let here = mid([lo, hi]);
+        let up = match (
+            span(k + 1, Some(id)),
+            k.checked_sub(1).and_then(|j| span(j, Some(id))),
+        ) {
+            (Some((_, next)), _) => mid(next) >= here,
+            (None, Some((_, last))) => mid(last) <= here,
+            (None, None) => true,
+        };
+        Some((id, if up { [lo, hi] } else { [hi, lo] }, height_m))
     }
 
     /// The wall line of station `k`'s lane, with the distance from it the

@@ -12,6 +12,7 @@ use stucco_core::{
     wrap_angle,
 };
 use stucco_mission::*;
+use stucco_plan::{Rect, SurfaceId};
 
 const DT: f64 = 0.02;
 const ROOM: [f64; 2] = [5.0, 3.0];
@@ -31,6 +32,8 @@ struct Robot {
     position_sigma: f64,
     /// What the map has standing on the floor.
     floor: Vec<stucco_plan::Obstacle>,
+    /// The windows the cameras have found.
+    windows: Vec<WindowEstimate>,
 }
 
 impl Robot {
@@ -47,6 +50,7 @@ impl Robot {
             room_m: ROOM,
             position_sigma: 0.003,
             floor: Vec::new(),
+            windows: Vec::new(),
         }
     }
 
@@ -61,7 +65,7 @@ impl Robot {
             walls_seen: [100; 4],
             doors: self.doors.clone(),
             height_m: 2.6,
-            windows: Vec::new(),
+            windows: self.windows.clone(),
             obstacles: self.floor.clone(),
             room: self.room,
         }
@@ -1007,6 +1011,164 @@ fn plaster(survey: bool) -> TaskSpec {
     }
 }
 
+/// What [`plaster_finding_a_window`] saw.
+struct WindowRun {
+    /// Ticks the tool's camera looked.
+    looking: usize,
+    /// Plaster flowed while it looked.
+    sprayed_looking: bool,
+    /// The window put in the estimate: its wall, where, and the station.
+    window: Option<(WallName, Rect, usize)>,
+    events: Vec<Event>,
+    /// The plan as carried out last.
+    plan: Option<stucco_plan::Plan>,
+}
+
+/// Runs a plastering task in a 5 × 3 m room planned with no window known;
+/// the tool's camera, while it looks at the first station on a wall, finds
+/// one in the middle of what that station reaches.
+fn plaster_finding_a_window(camera: bool) -> WindowRun {
+    let tool = stucco_plan::SprayTool {
+        camera,
+        ..stucco_plan::SprayTool::default()
+    };
+    let mut cfg = config(true);
+    cfg.spray = Some(tool);
+    let mut exec = Executive::new(cfg, vec![plaster(false)]);
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let (mut looking, mut sprayed_looking) = (0, false);
+    let (mut station, mut window) = (0, None);
+    let (mut events, mut last_plan) = (Vec::new(), None);
+    for _ in 0..(4000.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        if let Some(p) = exec.plaster_plan() {
+            last_plan = Some(p.clone());
+        }
+        for e in &out.events {
+            if let EventKind::StationStarted { station: k, .. } = e.kind {
+                station = k;
+            }
+        }
+        events.extend(out.events.iter().cloned());
+        if out.tool_look {
+            looking += 1;
+            sprayed_looking |= out.tool.spray;
+            if window.is_none() {
+                let plan = exec.plaster_plan().expect("a plan");
+                let pass = plan.stations[station]
+                    .passes
+                    .iter()
+                    .find(|p| p.surface != SurfaceId::Ceiling)
+                    .expect("a wall at a station the camera looks from");
+                let SurfaceId::Wall(wall) = pass.surface else {
+                    unreachable!()
+                };
+                let us = pass.moves.iter().flat_map(|m| [m.from_m[0], m.to_m[0]]);
+                let (lo, hi) = us.fold((f64::MAX, f64::MIN), |(a, b), u| (a.min(u), b.max(u)));
+                let mid = 0.5 * (lo + hi);
+                let rect = Rect {
+                    u_m: [mid - 0.25, mid + 0.25],
+                    v_m: [1.0, 2.0],
+                };
+                robot.windows.push(WindowEstimate {
+                    wall,
+                    along_m: rect.u_m,
+                    sill_head_m: rect.v_m,
+                });
+                window = Some((wall, rect, station));
+            }
+        }
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    WindowRun {
+        looking,
+        sprayed_looking,
+        window,
+        events,
+        plan: last_plan,
+    }
+}
+
+#[test]
+fn a_window_the_tools_camera_finds_at_a_station_is_kept_out_of_the_coat_from_there_on() {
+    let WindowRun {
+        looking,
+        sprayed_looking,
+        window,
+        events,
+        plan,
+    } = plaster_finding_a_window(true);
+    let (wall, rect, station) = window.expect("the camera looked");
+    // Every wall station was looked at, spray off.
+    let walls = events
+        .iter()
+        .filter(|e| matches!(&e.kind, EventKind::PassDone { surface, .. } if surface != "ceiling"))
+        .count();
+    assert!(walls >= 4, "{walls} wall passes");
+    assert!(
+        looking as f64 * DT > walls as f64 * 1.0,
+        "{looking} ticks looking"
+    );
+    assert!(!sprayed_looking);
+    let found: Vec<_> = events
+        .iter()
+        .filter_map(|e| match &e.kind {
+            EventKind::WindowFound {
+                station: k,
+                wall: w,
+                along_m,
+                ..
+            } => Some((*k, w.clone(), *along_m)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        found,
+        vec![(station, SurfaceId::Wall(wall).name().to_owned(), rect.u_m)]
+    );
+    // The plan carried out sprays nothing into it from that station on,
+    // and has it as an opening of the wall.
+    let plan = plan.expect("a plan");
+    let keep_out = rect.grown(plan.tool.spray_off_m - 1e-9);
+    for (k, st) in plan.stations.iter().enumerate().skip(station) {
+        for p in st
+            .passes
+            .iter()
+            .filter(|p| p.surface == SurfaceId::Wall(wall))
+        {
+            assert!(
+                !p.moves
+                    .iter()
+                    .any(|m| m.spray && keep_out.clip(m.from_m, m.to_m).is_some()),
+                "station {k} sprays into the window"
+            );
+        }
+    }
+    let surface = plan.surface(SurfaceId::Wall(wall)).expect("the wall");
+    assert!(surface.openings.iter().any(|o| o.rect == rect));
+}
+
+#[test]
+fn a_tool_without_a_camera_sprays_without_looking() {
+    let WindowRun {
+        looking,
+        window,
+        events,
+        ..
+    } = plaster_finding_a_window(false);
+    assert_eq!(looking, 0);
+    assert!(window.is_none());
+    assert!(
+        !events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::WindowFound { .. }))
+    );
+}
+
 #[test]
 fn a_plaster_task_without_a_spray_tool_fails_saying_so() {
     let mut exec = executive(vec![plaster(false)], true);
@@ -1710,6 +1872,47 @@ fn a_survey_driven_corner_to_corner_moves_its_corners_off_a_column_found_under_w
     println!("facing the east wall: {facing_east_s:.1} s; closest {closest:.3} m");
     assert!(facing_east_s > 2.0, "{facing_east_s} s");
     assert!(closest >= 0.01, "{closest}");
+}
+
+#[test]
+fn a_survey_stays_on_the_robots_side_of_furniture_across_the_whole_room() {
+    // A bedroom as its floor map may have it: the bed and the desk one box
+    // right across the room, 1.45-2.0 m from the south wall, the robot in
+    // the strip south of it. The strip beyond is wider, but no way leads
+    // there: the loop is the robot's strip's, and it is driven.
+    let tool = stucco_plan::SprayTool::default();
+    let mut cfg = config(true);
+    cfg.spray = Some(tool);
+    cfg.safety.obstacle_margin_m = 0.03;
+    cfg.safety.lateral_margin_m = 0.02;
+    let mut exec = Executive::new(cfg, vec![plaster(true)]);
+    let mut robot = Robot::at(Pose2::new(3.4, 0.35, std::f64::consts::FRAC_PI_2));
+    robot.room_m = [4.0, 3.65];
+    robot.floor = vec![stucco_plan::Obstacle {
+        min_m: [0.0, 1.45],
+        max_m: [4.0, 2.0],
+        height_m: 1.0,
+    }];
+    let mut plans = Vec::new();
+    let mut farthest_north = f64::MIN;
+    for _ in 0..(600.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        for e in &out.events {
+            if matches!(e.kind, EventKind::PlanMade { .. }) {
+                plans.push(robot.now);
+            }
+        }
+        robot.drive(out.drive);
+        farthest_north = farthest_north.max(robot.pose.y);
+        if plans.len() >= 2 || exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(plans.len(), 2, "{:?}", exec.status());
+    let survey_s = plans[1].seconds_since(plans[0]);
+    println!("survey {survey_s:.1} s, the rear axle at most {farthest_north:.2} m north");
+    assert!(survey_s > 10.0, "{survey_s} s");
+    assert!(farthest_north < 1.45, "{farthest_north}");
 }
 
 #[test]

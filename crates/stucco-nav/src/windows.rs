@@ -179,6 +179,34 @@ impl WindowFinder {
         self.last_along_m = None;
     }
 
+    /// Where along the wall the last profile of the pass under way met
+    /// it, if one is under way.
+    pub fn last_along_m(&self) -> Option<f64> {
+        self.last_along_m
+    }
+
+    /// Windows of the pass under way seen from one edge on, their far
+    /// edge not yet reached: each as far as the hole has been seen (the
+    /// least it is), for keeping plaster out of it before it is seen whole.
+    pub fn seen_in_part(&self) -> Vec<Window> {
+        self.tracks
+            .iter()
+            .filter(|t| t.gaps.len() >= 2)
+            .filter_map(|t| {
+                let last = *t.gaps.last()?;
+                close(
+                    t,
+                    Some(last.along_m),
+                    &WindowConfig {
+                        min_size_m: 0.0,
+                        ..self.config.clone()
+                    },
+                )
+            })
+            .filter(|w| w.height_m() >= self.config.min_size_m)
+            .collect()
+    }
+
     /// The windows found so far.
     pub fn windows(&self) -> &[Window] {
         &self.found
@@ -387,6 +415,7 @@ mod tests {
         RangeProfile {
             stamp: Stamp::ZERO,
             sensor: "cam".into(),
+            origin_m: [0.0, 0.0, 1.0],
             azimuth_rad: 0.0,
             elevations_rad: elevations,
             ranges_m: ranges,
@@ -399,6 +428,38 @@ mod tests {
             distance_m: distance,
             height_m: 1.0,
             direction: Vector2::new(1.0, 0.0),
+        }
+    }
+
+    #[test]
+    fn a_window_seen_from_one_edge_is_known_in_part_until_it_is_seen_whole() {
+        // A look that ends inside the window (a station's reach), and the
+        // next one going on from there past its far edge.
+        let window = [0.9, 1.9, 1.0, 2.1];
+        let mut f = WindowFinder::new(WindowConfig::default());
+        let step = 0.025;
+        let look = |f: &mut WindowFinder, from: f64, to: f64| {
+            let n = ((to - from) / step).round() as usize;
+            for k in 0..=n {
+                let u = from + step * k as f64;
+                f.add(&profile(u, 0.3, window), &pose(u, 0.3));
+            }
+        };
+        look(&mut f, 0.75, 1.85);
+        assert!(f.windows().is_empty());
+        let part = f.seen_in_part();
+        assert_eq!(part.len(), 1, "{part:?}");
+        assert!(
+            (part[0].along_m[0] - 0.9).abs() <= step / 2.0 + 1e-9,
+            "{part:?}"
+        );
+        assert!((part[0].along_m[1] - 1.85).abs() < 1e-9, "{part:?}");
+        look(&mut f, 1.7, 2.2);
+        assert!(f.seen_in_part().is_empty());
+        let w = f.windows();
+        assert_eq!(w.len(), 1, "{w:?}");
+        for (got, want) in w[0].along_m.iter().zip(&window[..2]) {
+            assert!((got - want).abs() <= step / 2.0 + 1e-9, "{w:?}");
         }
     }
 

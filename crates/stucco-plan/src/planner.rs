@@ -19,7 +19,7 @@
 //! sofa, under a radiator, too high for the lift) is not planned and is
 //! reported with its area.
 
-use crate::surface::{RoomModel, Surface, SurfaceId, WallLine};
+use crate::surface::{Opening, OpeningKind, RoomModel, Surface, SurfaceId, WallLine, WallOpening};
 use crate::{PlanError, Rect, SprayTool};
 use serde::{Deserialize, Serialize};
 use stucco_core::{Aim, Pose2, VehicleSpec, WallName};
@@ -96,6 +96,36 @@ pub struct Pass {
 }
 
 impl Pass {
+    /// Turns the spray off wherever a move aims inside `rect`: each move
+    /// crossing it is split at its border, the speed kept, so the pass
+    /// takes as long as before and lays nothing there.
+    pub fn spray_off_inside(&mut self, rect: &Rect) {
+        let mut out = Vec::with_capacity(self.moves.len());
+        for m in self.moves.drain(..) {
+            let Some([t0, t1]) = m.spray.then(|| rect.clip(m.from_m, m.to_m)).flatten() else {
+                out.push(m);
+                continue;
+            };
+            let at = |t: f64| {
+                [
+                    m.from_m[0] + t * (m.to_m[0] - m.from_m[0]),
+                    m.from_m[1] + t * (m.to_m[1] - m.from_m[1]),
+                ]
+            };
+            for (a, b, spray) in [(0.0, t0, true), (t0, t1, false), (t1, 1.0, true)] {
+                if (b - a) * m.length_m() > 1e-9 {
+                    out.push(Move {
+                        from_m: at(a),
+                        to_m: at(b),
+                        spray,
+                        ..m
+                    });
+                }
+            }
+        }
+        self.moves = out;
+    }
+
     /// Duration, s.
     pub fn duration_s(&self) -> f64 {
         self.moves.iter().map(Move::duration_s).sum()
@@ -229,6 +259,67 @@ impl Plan {
     /// Time the nozzle spends spraying, s.
     pub fn spray_s(&self) -> f64 {
         self.passes().map(|(_, p)| p.spray_s()).sum()
+    }
+
+    /// Keeps a window found once the plan was made (the camera on the
+    /// tool saw it at a station) out of the coat: it becomes an opening of
+    /// its wall (or grows the one it overlaps to hold both), and every
+    /// pass on that wall from station `from` on lays nothing within the
+    /// tool's spray-off distance of it. False, and nothing changed, when
+    /// the wall's openings hold it already.
+    pub fn add_window(
+        &mut self,
+        wall: WallName,
+        along_m: [f64; 2],
+        sill_head_m: [f64; 2],
+        from: usize,
+    ) -> bool {
+        let id = SurfaceId::Wall(wall);
+        let rect = Rect {
+            u_m: along_m,
+            v_m: sill_head_m,
+        };
+        let Some(surface) = self.surfaces.iter_mut().find(|s| s.id == id) else {
+            return false;
+        };
+        let rect =
+            match surface.openings.iter_mut().find(|o| o.rect.overlaps(&rect)) {
+                Some(o) => {
+                    let both = o.rect.union(&rect);
+                    if both == o.rect {
+                        return false;
+                    }
+                    let old = o.rect;
+                    o.rect = both;
+                    if let Some(r) = self.room.openings.iter_mut().find(|r| {
+                        r.wall == wall && r.along_m == old.u_m && r.sill_head_m == old.v_m
+                    }) {
+                        r.along_m = both.u_m;
+                        r.sill_head_m = both.v_m;
+                    }
+                    both
+                }
+                None => {
+                    surface.openings.push(Opening {
+                        kind: OpeningKind::Window,
+                        rect,
+                    });
+                    self.room.openings.push(WallOpening {
+                        wall,
+                        kind: OpeningKind::Window,
+                        along_m,
+                        sill_head_m,
+                    });
+                    rect
+                }
+            };
+        let keep_out = rect.grown(self.tool.spray_off_m);
+        for station in self.stations.iter_mut().skip(from) {
+            for pass in station.passes.iter_mut().filter(|p| p.surface == id) {
+                pass.spray_off_inside(&keep_out);
+            }
+        }
+        true
     }
 
     /// Every pass with the index of its station.
@@ -1355,8 +1446,96 @@ mod tests {
         )
     }
 
+    #[test]
+    fn a_window_found_at_a_station_is_kept_out_of_the_passes_from_there_on() {
+        let r = room([4.0, 3.0], 2.6, Vec::new());
+        let mut p = make(&r);
+        let wall = WallName::East;
+        let id = SurfaceId::Wall(wall);
+        let on_wall: Vec<usize> = p
+            .stations
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.passes.iter().any(|q| q.surface == id))
+            .map(|(i, _)| i)
+            .collect();
+        assert!(on_wall.len() >= 2, "{on_wall:?}");
+        let (first, from) = (on_wall[0], on_wall[1]);
+        let before = p.clone();
+        let (along, sill_head) = ([0.9, 1.9], [1.0, 2.1]);
+        assert!(p.add_window(wall, along, sill_head, from));
+        // Seen again inside it: nothing more to do.
+        assert!(!p.add_window(wall, [1.0, 1.8], [1.1, 2.0], from));
+        let keep_out = Rect {
+            u_m: along,
+            v_m: sill_head,
+        }
+        .grown(p.tool.spray_off_m - 1e-9);
+        for (k, (a, b)) in before.stations.iter().zip(&p.stations).enumerate() {
+            for (qa, qb) in a.passes.iter().zip(&b.passes) {
+                // Every pass takes as long as it did.
+                assert!((qa.duration_s() - qb.duration_s()).abs() < 1e-9);
+                let sprays_in = qb
+                    .moves
+                    .iter()
+                    .any(|m| m.spray && keep_out.clip(m.from_m, m.to_m).is_some());
+                if qb.surface == id && k >= from {
+                    assert!(!sprays_in, "station {k} sprays into the window");
+                } else {
+                    // Before the station it was found at, and elsewhere:
+                    // as planned.
+                    assert_eq!(qa, qb, "station {k}");
+                }
+            }
+        }
+        // The station before it had sprayed into it (the plan did not
+        // know the window).
+        let sprayed_before = before.stations[first]
+            .passes
+            .iter()
+            .chain(before.stations[from].passes.iter())
+            .filter(|q| q.surface == id)
+            .any(|q| {
+                q.moves
+                    .iter()
+                    .any(|m| m.spray && keep_out.clip(m.from_m, m.to_m).is_some())
+            });
+        assert!(sprayed_before);
+        let s = p.surface(id).expect("the east wall");
+        assert_eq!(s.openings.len(), 1);
+        assert_eq!(p.room.openings.len(), 1);
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]
+        /// Masking a pass keeps its time and its spraying outside the
+        /// rectangle, and sprays nothing inside it.
+        #[test]
+        fn spray_off_inside_lays_nothing_there_and_keeps_the_rest(
+            pts in proptest::collection::vec((0.0..3.0f64, 0.0..2.6f64, any::<bool>()), 2..12),
+            u0 in 0.0..2.5f64, du in 0.05..1.5f64, v0 in 0.0..2.2f64, dv in 0.05..1.2f64,
+        ) {
+            let moves: Vec<Move> = pts.windows(2).map(|w| Move {
+                from_m: [w[0].0, w[0].1],
+                to_m: [w[1].0, w[1].1],
+                speed_mps: 0.3,
+                spray: w[0].2,
+            }).collect();
+            let mut pass = Pass { surface: SurfaceId::Wall(WallName::North), aim: Aim::Left, moves };
+            let before = pass.clone();
+            let rect = Rect { u_m: [u0, u0 + du], v_m: [v0, v0 + dv] };
+            pass.spray_off_inside(&rect);
+            prop_assert!((pass.duration_s() - before.duration_s()).abs() < 1e-9);
+            let inside = |q: &Pass| -> f64 {
+                q.moves.iter().filter(|m| m.spray).map(|m| {
+                    rect.clip(m.from_m, m.to_m).map_or(0.0, |[a, b]| (b - a) * m.length_m())
+                }).sum()
+            };
+            prop_assert!(inside(&pass) < 1e-9, "{}", inside(&pass));
+            let sprayed = |q: &Pass| -> f64 { q.moves.iter().filter(|m| m.spray).map(Move::length_m).sum() };
+            prop_assert!((sprayed(&before) - inside(&before) - sprayed(&pass)).abs() < 1e-9);
+        }
+
         /// A coverage plan stays inside its surfaces and clear of their
         /// openings, reaches every aim point, and its own prediction
         /// coats ≥ 99.9% of the plasterable area within tolerance.

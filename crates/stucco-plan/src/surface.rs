@@ -73,6 +73,49 @@ impl Rect {
         }
     }
 
+    /// The smallest rectangle holding both.
+    pub fn union(&self, other: &Rect) -> Rect {
+        Rect {
+            u_m: [self.u_m[0].min(other.u_m[0]), self.u_m[1].max(other.u_m[1])],
+            v_m: [self.v_m[0].min(other.v_m[0]), self.v_m[1].max(other.v_m[1])],
+        }
+    }
+
+    /// True when the two share more than a border.
+    pub fn overlaps(&self, other: &Rect) -> bool {
+        self.u_m[0] < other.u_m[1]
+            && other.u_m[0] < self.u_m[1]
+            && self.v_m[0] < other.v_m[1]
+            && other.v_m[0] < self.v_m[1]
+    }
+
+    /// The part `[t0, t1]` of the segment from `a` to `b` (as fractions
+    /// of it) that lies inside, if any (Liang–Barsky).
+    pub fn clip(&self, a: [f64; 2], b: [f64; 2]) -> Option<[f64; 2]> {
+        let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+        for k in 0..2 {
+            let (lo, hi) = if k == 0 {
+                (self.u_m[0], self.u_m[1])
+            } else {
+                (self.v_m[0], self.v_m[1])
+            };
+            let d = b[k] - a[k];
+            if d.abs() < 1e-12 {
+                if a[k] < lo || a[k] > hi {
+                    return None;
+                }
+                continue;
+            }
+            let (mut e0, mut e1) = ((lo - a[k]) / d, (hi - a[k]) / d);
+            if e0 > e1 {
+                std::mem::swap(&mut e0, &mut e1);
+            }
+            t0 = t0.max(e0);
+            t1 = t1.min(e1);
+        }
+        (t0 < t1).then_some([t0, t1])
+    }
+
     /// Area, m².
     pub fn area_m2(&self) -> f64 {
         (self.u_m[1] - self.u_m[0]).max(0.0) * (self.v_m[1] - self.v_m[0]).max(0.0)

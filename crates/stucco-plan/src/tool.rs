@@ -56,6 +56,10 @@ pub struct SprayTool {
     pub position_tolerance_m: f64,
     /// Height of a door whose top the map does not know, m.
     pub door_head_m: f64,
+    /// The carriage carries a range camera beside the nozzle: at each
+    /// station the wall is looked at, spray off, before it is sprayed, and
+    /// a window found there is kept out of the coat.
+    pub camera: bool,
 }
 
 impl Default for SprayTool {
@@ -83,6 +87,7 @@ impl Default for SprayTool {
             clearance_m: 0.12,
             position_tolerance_m: 0.03,
             door_head_m: 2.1,
+            camera: true,
         }
     }
 }
