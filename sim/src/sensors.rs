@@ -103,14 +103,17 @@ impl CameraSpec {
 pub const TOOL_CAMERA: &str = "tool-camera";
 
 impl Default for CameraSpec {
-    /// Looking left, from 35° below the horizontal to straight up, 20
-    /// profiles a second (a line scanner turned on its side).
+    /// Looking left, from 35° below the horizontal to straight up in 192
+    /// rays (0.65° apart, as a line scanner turned on its side; at 96 rays,
+    /// 1.3° apart, a window's head seen across a bedroom from 2.9 m came
+    /// out 3–4.5 cm low, a ray's spacing there being 7 cm), 20 profiles a
+    /// second.
     fn default() -> Self {
         CameraSpec {
             name: "range-camera".to_owned(),
             azimuth_rad: std::f64::consts::FRAC_PI_2,
             elevation_rad: [-0.6, std::f64::consts::FRAC_PI_2],
-            rays: 96,
+            rays: 192,
             rate_hz: 20.0,
             height_m: 1.0,
             range_sigma_m: 0.01,

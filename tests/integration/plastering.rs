@@ -234,7 +234,9 @@ fn the_apartments_living_room_kitchen_and_bedroom_are_plastered_in_one_job() {
     );
     // Within ACCEPTANCE.md's coat: every window found (the kitchen's by
     // the tool's camera at its first station, where the body's camera
-    // cannot see its south edge past the counter) and kept out of the coat.
+    // cannot see its south edge past the counter), its edges within 2 cm
+    // (the bedroom's, beyond the bed, seen from 2.9 m), and kept out of the
+    // coat.
     let walls = r.wall_coverage_pct.unwrap();
     let ceiling = r.ceiling_coverage_pct.unwrap();
     let overspray = r.overspray_pct.unwrap();
@@ -244,8 +246,9 @@ fn the_apartments_living_room_kitchen_and_bedroom_are_plastered_in_one_job() {
     assert!(overspray <= 0.5, "overspray {overspray}%");
     assert!(cv <= 0.08, "CV {cv}");
     assert_eq!((r.windows_found, r.windows_total), (3, 3));
-    // Not yet within it: the bedroom's window, seen only across the bed,
-    // and the time. Printed, not asserted.
+    let edge = r.window_edge_err_max_m.unwrap();
+    assert!(edge <= 0.02, "window edges {edge} m off");
+    // Not yet within it: the time. Printed, not asserted.
     let (t, bound) = (
         r.mission_time_s.unwrap(),
         r.mission_time_lower_bound_s.unwrap(),
@@ -254,7 +257,7 @@ fn the_apartments_living_room_kitchen_and_bedroom_are_plastered_in_one_job() {
         "apartment: walls {walls:.2}%, ceiling {ceiling:.2}%, overspray {overspray:.3}%, \
          CV {:.2}%, window edges within {:.1} cm, {t:.0} s against {bound:.0} s ({:.3})",
         100.0 * cv,
-        100.0 * r.window_edge_err_max_m.unwrap(),
+        100.0 * edge,
         t / bound
     );
 }

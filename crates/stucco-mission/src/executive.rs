@@ -1215,6 +1215,32 @@ impl Executive {
                         a.current = None;
                         a.blocked_s = 0.0;
                     }
+                    // A plastering survey's loop turned on the move that
+                    // something blocks (it runs near the furniture it goes
+                    // round): the survey goes on corner to corner from the
+                    // end of the side it was on (the legs' sides are the
+                    // loop's, in the same order), each leg the planned way
+                    // round what the map holds.
+                    if a.blocked_s > SURVEY_BLOCKED_S
+                        && a.legs.is_none()
+                        && a.plaster
+                            .as_ref()
+                            .is_some_and(|r| matches!(r.phase, Phase::Surveying))
+                        && let TaskSpec::Plaster {
+                            survey_speed_mps, ..
+                        } = self.tasks[a.index]
+                        && let Some(mut legs) =
+                            survey_legs(&self.config.vehicle, inputs.estimate, survey_speed_mps)
+                    {
+                        legs.under_way = match a.current.as_ref().map(Behaviour::kind) {
+                            Some(BehaviourKind::Path { segment, .. }) => Some(*segment),
+                            _ => None,
+                        };
+                        a.legs = Some(legs);
+                        a.queue.clear();
+                        a.current = None;
+                        a.blocked_s = 0.0;
+                    }
                     if a.blocked_s > safety.blocked_timeout_s {
                         self.fail(now, "the way stayed blocked".to_owned());
                         *checkpoint_due = true;
@@ -1875,10 +1901,7 @@ impl Executive {
                 if left_s != 0.0 {
                     // To the look's start first, as to a pass's.
                     let left_s = if left_s < 0.0 {
-                        let far = (0..3)
-                            .map(|k| (aim.nozzle_m[k] - self.tool.nozzle_m[k]).abs())
-                            .fold(0.0, f64::max);
-                        far / run.plan.tool.axis_speed_mps + NOZZLE_SETTLE_S
+                        travel_s(&self.tool, &aim, run.plan.tool.axis_speed_mps)
                     } else {
                         left_s - dt
                     };
@@ -1932,10 +1955,7 @@ impl Executive {
                 };
                 let left_s = if left_s < 0.0 {
                     // Newly here: the axes travel at their speed.
-                    let far = (0..3)
-                        .map(|k| (first.nozzle_m[k] - self.tool.nozzle_m[k]).abs())
-                        .fold(0.0, f64::max);
-                    far / run.plan.tool.axis_speed_mps + NOZZLE_SETTLE_S
+                    travel_s(&self.tool, &first, run.plan.tool.axis_speed_mps)
                 } else {
                     left_s - dt
                 };
@@ -2618,14 +2638,35 @@ fn survey_way(
         way.push(Behaviour::path(&config.gains, path, speed));
         return (way, None);
     }
+    (Vec::new(), survey_legs(vehicle, est, speed))
+}
+
+/// A survey loop driven corner to corner, `SURVEY_LEG_STANDOFF_M` off the
+/// walls, stopping at each: to the first, then round to it, each leg the
+/// planned way, the corners fitted again to the floor map as each starts.
+/// None: the room leaves no loop.
+fn survey_legs(vehicle: &VehicleSpec, est: &Estimate, speed: f64) -> Option<Legs> {
+    let side = 0.5 * vehicle.width_m + 0.15;
     let fit = ([SURVEY_LEG_STANDOFF_M; 2], [side, side]);
-    let Some(corners) = survey_rect(est, fit.0, fit.1, SURVEY_LEGS_MIN_M) else {
-        return (Vec::new(), None);
-    };
-    // Corner to corner, stopping at each: to the first, then round to it.
+    let corners = survey_rect(est, fit.0, fit.1, SURVEY_LEGS_MIN_M)?;
     let mut legs = Legs::new(corners.to_vec(), Some(corners.len() + 1), speed);
     legs.refit = Some(fit);
-    (Vec::new(), Some(legs))
+    Some(legs)
+}
+
+/// A plastering survey's loop turned on the move, stopped this long by
+/// something in its way, goes on corner to corner, s: the stops it meets
+/// at furniture it passes near mostly clear within 3.5 s (the two
+/// offices' table), and going on corner to corner costs ten times that.
+const SURVEY_BLOCKED_S: f64 = 5.0;
+
+/// Time the nozzle takes from `from` to `to`, each axis at `speed_mps`,
+/// and a few control periods more to be there, s.
+fn travel_s(from: &ToolCommand, to: &ToolCommand, speed_mps: f64) -> f64 {
+    let far = (0..3)
+        .map(|k| (to.nozzle_m[k] - from.nozzle_m[k]).abs())
+        .fold(0.0, f64::max);
+    far / speed_mps + NOZZLE_SETTLE_S
 }
 
 /// Shortest side of a survey loop driven corner to corner, m.

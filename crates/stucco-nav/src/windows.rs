@@ -105,9 +105,11 @@ struct Track {
 pub struct WindowFinder {
     config: WindowConfig,
     tracks: Vec<Track>,
-    /// The last profile seen, and whether it met the wall around the
-    /// heights of any window.
+    /// Where the last profile met the wall.
     last_along_m: Option<f64>,
+    /// The last profile's rays: the height each passed the face at, and
+    /// whether it met the face there.
+    last_rays: Vec<(f64, bool)>,
     found: Vec<Window>,
 }
 
@@ -132,7 +134,7 @@ impl WindowFinder {
         // the wall the fan meets it.
         let to_face = pose.distance_m / c;
         let along = pose.along_m + pose.direction.y * to_face;
-        let gaps = gaps_in(profile, pose, to_face, cfg);
+        let (gaps, rays) = gaps_in(profile, pose, to_face, cfg);
         // Continue the tracks whose heights a gap overlaps; start new ones.
         let mut used = vec![false; gaps.len()];
         for t in &mut self.tracks {
@@ -152,9 +154,12 @@ impl WindowFinder {
                 None => t.missed += 1,
             }
         }
+        // An edge is where the wall is seen beside the hole: a profile
+        // before it (or after it) that did not meet the face at the hole's
+        // heights (furniture in front) leaves that edge unknown.
         for (g, _) in gaps.iter().zip(&used).filter(|(_, u)| !**u) {
             self.tracks.push(Track {
-                before_m: self.last_along_m,
+                before_m: self.last_along_m.filter(|_| on_face(&self.last_rays, g.z)),
                 gaps: vec![*g],
                 missed: 0,
             });
@@ -165,11 +170,17 @@ impl WindowFinder {
             .partition(|t| t.missed > 0);
         self.tracks = open;
         for t in done {
-            if let Some(w) = close(&t, Some(along), cfg) {
+            let after = t
+                .gaps
+                .last()
+                .is_some_and(|g| on_face(&rays, g.z))
+                .then_some(along);
+            if let Some(w) = close(&t, after, cfg) {
                 self.fuse(w);
             }
         }
         self.last_along_m = Some(along);
+        self.last_rays = rays;
     }
 
     /// Ends the pass: tracks still open have no far edge and are dropped
@@ -177,6 +188,7 @@ impl WindowFinder {
     pub fn end_pass(&mut self) {
         self.tracks.clear();
         self.last_along_m = None;
+        self.last_rays.clear();
     }
 
     /// Where along the wall the last profile of the pass under way met
@@ -267,14 +279,30 @@ fn close(t: &Track, after_m: Option<f64>, cfg: &WindowConfig) -> Option<Window> 
     (w.width_m() >= cfg.min_size_m && w.height_m() >= cfg.min_size_m).then_some(w)
 }
 
+/// True when most of a profile's rays that pass the face between the
+/// heights `z` met it there.
+fn on_face(rays: &[(f64, bool)], z: [f64; 2]) -> bool {
+    let (mut n, mut face) = (0, 0);
+    for &(_, on) in rays.iter().filter(|(zf, _)| (z[0]..=z[1]).contains(zf)) {
+        n += 1;
+        face += usize::from(on);
+    }
+    n > 0 && face as f64 >= ON_FACE_SHARE * n as f64
+}
+
+/// Share of the rays at a hole's heights that must meet the face beside
+/// it for that side to be its edge.
+const ON_FACE_SHARE: f64 = 0.8;
+
 /// The gaps of one profile: runs of rays through the face, each bounded
-/// by rays on it.
+/// by rays on it; and each ray's height at the face with whether it met
+/// the face there.
 fn gaps_in(
     profile: &RangeProfile,
     pose: &ProfilePose,
     to_face: f64,
     cfg: &WindowConfig,
-) -> Vec<Gap> {
+) -> (Vec<Gap>, Vec<(f64, bool)>) {
     #[derive(Clone, Copy, PartialEq)]
     enum Ray {
         Face,
@@ -374,7 +402,12 @@ fn gaps_in(
     for g in &mut out {
         g.along_m = along;
     }
-    out
+    let rays = face_z
+        .iter()
+        .zip(&kinds)
+        .map(|(&z, &k)| (z, k == Ray::Face))
+        .collect();
+    (out, rays)
 }
 
 #[cfg(test)]
@@ -460,6 +493,35 @@ mod tests {
         assert_eq!(w.len(), 1, "{w:?}");
         for (got, want) in w[0].along_m.iter().zip(&window[..2]) {
             assert!((got - want).abs() <= step / 2.0 + 1e-9, "{w:?}");
+        }
+    }
+
+    #[test]
+    fn furniture_before_part_of_a_window_leaves_no_edge_where_it_stands() {
+        // A window 1.0-2.2 m along; a wardrobe 0.3 m before the camera,
+        // 1.6-1.8 m along, hides the wall up to 1.5 m there. The window's
+        // hole is cut by it, but its ends are not the window's edges.
+        let window = [1.0, 2.2, 0.9, 2.1];
+        let mut f = WindowFinder::new(WindowConfig::default());
+        let step = 0.02;
+        for k in 0..100 {
+            let u = 0.5 + step * k as f64;
+            let mut p = profile(u, 0.6, window);
+            if (1.6..=1.8).contains(&u) {
+                for (r, e) in p.ranges_m.iter_mut().zip(&p.elevations_rad) {
+                    let z = 1.0 + 0.3 * e.tan();
+                    if z < 1.5 {
+                        *r = 0.3 / e.cos();
+                    }
+                }
+            }
+            f.add(&p, &pose(u, 0.6));
+        }
+        let w = f.windows();
+        for x in w {
+            for e in x.along_m {
+                assert!((e - 1.6).abs() > 0.05 && (e - 1.8).abs() > 0.05, "{w:?}");
+            }
         }
     }
 
