@@ -287,6 +287,13 @@ fn a_bad_spray_table_names_file_line_and_key() {
         err.contains("bad.toml:10") && err.contains("nozzle"),
         "{err}"
     );
+    // The tool's camera is on or off, nothing else.
+    std::fs::write(&path, format!("{head}[spray]\ncamera = \"yes\"\n\n{task}")).unwrap();
+    let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
+    assert!(
+        err.contains("bad.toml:10") && err.contains("camera"),
+        "{err}"
+    );
     std::fs::write(&path, format!("{head}{task}")).unwrap();
     let err = format!("{:#}", stucco_cli::Mission::load(&path).unwrap_err());
     assert!(

@@ -543,18 +543,27 @@ fn line_of_array(text: &str, table: &str, n: usize, key: &str) -> usize {
 }
 
 /// `text` (the file at `path`) read as a `T`; a fault is [`BadInput`]
-/// naming `PATH:LINE:COL` and what was expected there.
+/// naming `PATH:LINE:COL`, the key written there when the fault is in its
+/// value (toml's message gives only the type it expected), and what was
+/// expected.
 pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
     toml::from_str(text).map_err(|e| {
         let (line, column) = e
             .span()
             .map(|s| stucco_core::line_column(text, s.start))
             .unwrap_or((0, 0));
-        BadInput(format!(
-            "{}:{line}:{column}: {}",
-            path.display(),
-            e.message()
-        ))
+        let key = text
+            .lines()
+            .nth(line.saturating_sub(1))
+            .and_then(|l| l.split_once('='))
+            .filter(|(k, _)| k.len() < column)
+            .map(|(k, _)| k.trim())
+            .filter(|k| !k.is_empty() && !e.message().contains(k));
+        let at = format!("{}:{line}:{column}", path.display());
+        BadInput(match key {
+            Some(k) => format!("{at}: `{k}`: {}", e.message()),
+            None => format!("{at}: {}", e.message()),
+        })
         .into()
     })
 }

@@ -675,11 +675,7 @@ impl Navigator {
                     .into_iter()
                     .map(move |x| (w, x))
             })
-            .filter(|(w, x)| {
-                !known.iter().any(|(k, f)| {
-                    k == w && f.along_m[0] < x.along_m[1] && x.along_m[0] < f.along_m[1]
-                })
-            })
+            .filter(|(w, x)| !known.iter().any(|(k, f)| k == w && f.overlaps(x)))
             .collect()
     }
 
@@ -925,12 +921,7 @@ fn room_windows(view: &RoomView) -> Vec<(WallName, Window)> {
         .flat_map(|&w| {
             let mut found: Vec<Window> = view.windows[w.index()].windows().to_vec();
             for t in view.tool_windows[w.index()].windows() {
-                match found.iter_mut().find(|f| {
-                    f.along_m[0] < t.along_m[1]
-                        && t.along_m[0] < f.along_m[1]
-                        && f.sill_head_m[0] < t.sill_head_m[1]
-                        && t.sill_head_m[0] < f.sill_head_m[1]
-                }) {
+                match found.iter_mut().find(|f| f.overlaps(t)) {
                     Some(f) => {
                         f.along_m = t.along_m;
                         f.observations += t.observations;

@@ -1873,25 +1873,22 @@ impl Executive {
                         heading_off_rad: off.theta,
                     },
                 });
-                let looks = run.plan.tool.camera
-                    && run.look(station, LOOK_SPARE_M, LOOK_HEIGHT_M).is_some();
-                run.phase = if looks {
-                    Phase::Looking {
+                let look = run
+                    .look(station, LOOK_SPARE_M, LOOK_HEIGHT_M)
+                    .filter(|_| run.plan.tool.camera);
+                run.phase = match look {
+                    Some(look) => Phase::Looking {
+                        look,
                         left_s: -1.0,
                         t_s: 0.0,
-                    }
-                } else {
-                    Phase::Positioning { left_s: -1.0 }
+                    },
+                    None => Phase::Positioning { left_s: -1.0 },
                 };
                 TaskStep::Drive(DriveCommand::STOP)
             }
-            Phase::Looking { left_s, t_s } => {
+            Phase::Looking { look, left_s, t_s } => {
                 let station = run.cursor.station;
-                let Some((surface, [u0, u1], v)) = run.look(station, LOOK_SPARE_M, LOOK_HEIGHT_M)
-                else {
-                    run.phase = Phase::Positioning { left_s: -1.0 };
-                    return TaskStep::Drive(DriveCommand::STOP);
-                };
+                let (surface, [u0, u1], v) = (look.surface, look.u_m, look.height_m);
                 let sweep_s = (u1 - u0).abs() / LOOK_SPEED_MPS;
                 let u = u0 + (u1 - u0) * (t_s / sweep_s.max(1e-9)).clamp(0.0, 1.0);
                 let Some(aim) = run.nozzle_for(surface, [u, v], &est.pose, false) else {
@@ -1907,7 +1904,8 @@ impl Executive {
                     };
                     self.tool = aim;
                     run.phase = Phase::Looking {
-                        left_s: if left_s > 0.0 { left_s } else { 0.0 },
+                        look,
+                        left_s: left_s.max(0.0),
                         t_s: 0.0,
                     };
                     return TaskStep::Drive(DriveCommand::STOP);
@@ -1915,6 +1913,7 @@ impl Executive {
                 self.tool = aim;
                 if t_s < sweep_s {
                     run.phase = Phase::Looking {
+                        look,
                         left_s: 0.0,
                         t_s: t_s + dt,
                     };
@@ -2615,7 +2614,7 @@ fn survey_way(
     let [xs, ys] = est.room_m;
     // What the body reaches toward the furniture beside the loop's long
     // sides (half its width) and at its ends (its front, turning).
-    let side = 0.5 * vehicle.width_m + 0.15;
+    let side = survey_side_reach(vehicle);
     let front = vehicle.front_m() + 0.15;
     let half = if xs >= ys {
         [front, side]
@@ -2641,12 +2640,18 @@ fn survey_way(
     (Vec::new(), survey_legs(vehicle, est, speed))
 }
 
+/// What the body reaches toward the furniture beside a survey loop's
+/// side: half its width and 0.15 m, m.
+fn survey_side_reach(vehicle: &VehicleSpec) -> f64 {
+    0.5 * vehicle.width_m + 0.15
+}
+
 /// A survey loop driven corner to corner, `SURVEY_LEG_STANDOFF_M` off the
 /// walls, stopping at each: to the first, then round to it, each leg the
 /// planned way, the corners fitted again to the floor map as each starts.
 /// None: the room leaves no loop.
 fn survey_legs(vehicle: &VehicleSpec, est: &Estimate, speed: f64) -> Option<Legs> {
-    let side = 0.5 * vehicle.width_m + 0.15;
+    let side = survey_side_reach(vehicle);
     let fit = ([SURVEY_LEG_STANDOFF_M; 2], [side, side]);
     let corners = survey_rect(est, fit.0, fit.1, SURVEY_LEGS_MIN_M)?;
     let mut legs = Legs::new(corners.to_vec(), Some(corners.len() + 1), speed);

@@ -94,9 +94,9 @@ pub(crate) enum Phase {
     /// Standing, letting the estimate settle, since then.
     Settling { left_s: f64 },
     /// The camera on the tool looking along the station's wall, spray
-    /// off: the nozzle travelling to the look's start (`left_s` to go),
-    /// then sweeping, `t_s` into it.
-    Looking { left_s: f64, t_s: f64 },
+    /// off: the nozzle travelling to the look's start (`left_s` to go; -1:
+    /// not yet set off), then sweeping, `t_s` into it.
+    Looking { look: Look, left_s: f64, t_s: f64 },
     /// The nozzle travelling to the pass's first point, spray off.
     Positioning { left_s: f64 },
     /// In the cursor's move, this far into it.
@@ -104,6 +104,17 @@ pub(crate) enum Phase {
     /// Every pass sprayed: out of the last station's lane to where the
     /// robot can turn, for whatever comes next.
     Leaving,
+}
+
+/// A look along a station's wall with the camera on the tool.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Look {
+    /// The wall.
+    pub surface: SurfaceId,
+    /// From and to along it, m.
+    pub u_m: [f64; 2],
+    /// Height on it the aim runs at, m.
+    pub height_m: f64,
 }
 
 /// The `plaster` task's state.
@@ -295,12 +306,7 @@ impl PlasterRun {
     /// least `height_m`, and nowhere below where the station's strokes
     /// start (above what stands in front of the wall). None: no wall at
     /// station `k`.
-    pub fn look(
-        &self,
-        k: usize,
-        spare_m: f64,
-        height_m: f64,
-    ) -> Option<(SurfaceId, [f64; 2], f64)> {
+    pub fn look(&self, k: usize, spare_m: f64, height_m: f64) -> Option<Look> {
         // Where each stroke (a run of sprayed moves at one place along the
         // wall, by the millimetre) starts from below.
         let mut lowest = std::collections::BTreeMap::<i64, f64>::new();
@@ -344,7 +350,11 @@ impl PlasterRun {
             (None, Some((_, last))) => mid(last) <= here,
             (None, None) => true,
         };
-        Some((id, if up { [lo, hi] } else { [hi, lo] }, height_m))
+        Some(Look {
+            surface: id,
+            u_m: if up { [lo, hi] } else { [hi, lo] },
+            height_m,
+        })
     }
 
     /// The wall line of station `k`'s lane, with the distance from it the

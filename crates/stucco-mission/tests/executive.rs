@@ -117,6 +117,18 @@ struct Seen<'a> {
     telecommands: &'a [Telecommand],
 }
 
+/// One tick of `exec` with the laser seeing `obstacles` (robot frame).
+fn ask_seeing(exec: &mut Executive, robot: &Robot, obstacles: &[Point2<f64>]) -> Outputs {
+    ask(
+        exec,
+        robot,
+        Seen {
+            obstacles,
+            ..Seen::default()
+        },
+    )
+}
+
 /// One tick of `exec` on `robot`'s estimate (the robot is not moved).
 fn ask(exec: &mut Executive, robot: &Robot, seen: Seen) -> Outputs {
     let est = robot.estimate();
@@ -443,14 +455,7 @@ fn an_obstacle_stops_the_robot_and_a_lasting_one_fails_the_task() {
     let mut events = Vec::new();
     for _ in 0..(60.0 / DT) as usize {
         let seen = [robot.pose.inverse().transform_point(&person)];
-        let out = ask(
-            &mut exec,
-            &robot,
-            Seen {
-                obstacles: &seen,
-                ..Seen::default()
-            },
-        );
+        let out = ask_seeing(&mut exec, &robot, &seen);
         if exec.hazard() == Some(Hazard::Obstacle) && stopped_at.is_none() {
             stopped_at = Some(robot.pose.x);
         }
@@ -1924,14 +1929,7 @@ fn a_survey_loop_something_blocks_goes_on_corner_to_corner() {
             .iter()
             .map(|c| robot.pose.inverse().transform_point(c))
             .collect();
-        let out = ask(
-            &mut exec,
-            &robot,
-            Seen {
-                obstacles: &seen,
-                ..Seen::default()
-            },
-        );
+        let out = ask_seeing(&mut exec, &robot, &seen);
         for e in &out.events {
             match &e.kind {
                 EventKind::PlanMade { .. } => plans += 1,

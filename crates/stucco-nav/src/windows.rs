@@ -81,6 +81,14 @@ impl Window {
     pub fn height_m(&self) -> f64 {
         self.sill_head_m[1] - self.sill_head_m[0]
     }
+
+    /// True when the two share more than a border: one window seen twice.
+    pub fn overlaps(&self, other: &Window) -> bool {
+        self.along_m[0] < other.along_m[1]
+            && other.along_m[0] < self.along_m[1]
+            && self.sill_head_m[0] < other.sill_head_m[1]
+            && other.sill_head_m[0] < self.sill_head_m[1]
+    }
 }
 
 /// One profile's gap: where along the wall, and from which height to which.
@@ -232,12 +240,7 @@ impl WindowFinder {
 
     /// Adds `w`, averaged with a window found before in the same place.
     fn fuse(&mut self, w: Window) {
-        let same = self.found.iter_mut().find(|f| {
-            f.along_m[0] < w.along_m[1]
-                && w.along_m[0] < f.along_m[1]
-                && f.sill_head_m[0] < w.sill_head_m[1]
-                && w.sill_head_m[0] < f.sill_head_m[1]
-        });
+        let same = self.found.iter_mut().find(|f| f.overlaps(&w));
         match same {
             Some(f) => {
                 let (n, m) = (f.observations as f64, w.observations as f64);
