@@ -1686,10 +1686,10 @@ impl Executive {
         }
         let p = g.point(p_at, standoff.max(clearance));
         let turn_at = Pose2::new(p.x, p.y, goal.theta);
-        Ok((
-            go_to(&self.config.gains, from, &turn_at, speed_mps),
-            turn_at,
-        ))
+        // The plain way when it is clear, else a manoeuvre: a robot
+        // stopped on the standoff mid-pass (a run resumed there) is too
+        // near the wall to turn back on the spot.
+        Ok((way(&self.config, est, from, &turn_at, speed_mps), turn_at))
     }
 
     /// The plan a `plaster` task carries out: the one a checkpoint left
