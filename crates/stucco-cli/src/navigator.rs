@@ -909,12 +909,12 @@ impl Navigator {
     }
 }
 
-/// The windows found in `view`'s room, wall by wall.
 /// The windows of `view`, wall by wall: those the camera on the body
-/// found, their edges along the wall those the camera on the tool saw
-/// from the nozzle's standoff where it saw them too (their sill and head
-/// stay the body camera's, measured from farther off, square to them),
-/// and those only the tool's camera found.
+/// found, their edges along the wall fused with those the camera on the
+/// tool saw where it saw them too, each edge weighed by how tightly its
+/// profiles bracketed it (sill and head stay the body camera's, measured
+/// from farther off, square to them), and those only the tool's camera
+/// found.
 fn room_windows(view: &RoomView) -> Vec<(WallName, Window)> {
     WallName::ALL
         .iter()
@@ -922,10 +922,7 @@ fn room_windows(view: &RoomView) -> Vec<(WallName, Window)> {
             let mut found: Vec<Window> = view.windows[w.index()].windows().to_vec();
             for t in view.tool_windows[w.index()].windows() {
                 match found.iter_mut().find(|f| f.overlaps(t)) {
-                    Some(f) => {
-                        f.along_m = t.along_m;
-                        f.observations += t.observations;
-                    }
+                    Some(f) => f.fuse_edges(t),
                     None => found.push(*t),
                 }
             }

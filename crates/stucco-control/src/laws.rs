@@ -173,15 +173,28 @@ impl WallFollower {
     }
 }
 
+/// Deceleration the laws plan their stops with, m/s²: half what the
+/// drive can brake, so the wheel is sure to follow.
+pub const STOP_DECEL_MPS2: f64 = 0.4;
+
+/// The speed `to_go_m` short of a stop: cruising, until braking at
+/// `decel_mps2` from here would just stop on the spot (v = √(2·a·d)),
+/// and never under a twentieth of cruising (the last millimetres).
+pub fn stopping_speed(cruise_mps: f64, to_go_m: f64, decel_mps2: f64) -> f64 {
+    (2.0 * decel_mps2 * to_go_m.max(0.0))
+        .sqrt()
+        .clamp(0.05 * cruise_mps, cruise_mps)
+}
+
 /// Reaches a goal pose: follows the line through the goal along its
-/// heading, slowing down near it, and stops there.
+/// heading, braking evenly near it, and stops there.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoseRegulator {
     law: LineFollower,
     /// Cruising speed, m/s.
     pub speed_mps: f64,
-    /// Distance over which it slows to a stop, m.
-    pub slowdown_m: f64,
+    /// Deceleration it stops with, m/s².
+    pub decel_mps2: f64,
     /// Close enough, m.
     pub tolerance_m: f64,
 }
@@ -192,7 +205,7 @@ impl PoseRegulator {
         PoseRegulator {
             law: LineFollower::new(gains),
             speed_mps,
-            slowdown_m: 0.6,
+            decel_mps2: STOP_DECEL_MPS2,
             tolerance_m: 0.002,
         }
     }
@@ -205,7 +218,7 @@ impl PoseRegulator {
         if to_go <= self.tolerance_m {
             return DriveCommand::STOP;
         }
-        let speed = self.speed_mps * (to_go / self.slowdown_m).clamp(0.05, 1.0);
+        let speed = stopping_speed(self.speed_mps, to_go, self.decel_mps2);
         DriveCommand {
             speed_mps: speed,
             steer_rad: self.law.steer(rel.y, rel.theta, speed),
@@ -261,7 +274,7 @@ impl PathFollower {
                 continue;
             }
             let speed = if last {
-                self.speed_mps * (remaining / 0.6).clamp(0.05, 1.0)
+                stopping_speed(self.speed_mps, remaining, STOP_DECEL_MPS2)
             } else {
                 self.speed_mps
             };
@@ -392,6 +405,34 @@ mod tests {
             rel.x.abs() < 0.01 && rel.y.abs() < 0.01 && rel.theta.abs() < 0.01,
             "{rel:?}"
         );
+    }
+
+    #[test]
+    fn a_stop_brakes_evenly_and_lands_on_the_goal() {
+        let law = PoseRegulator::new(GainSchedule::default(), 0.8);
+        let goal = Pose2::new(2.0, 0.0, 0.0);
+        let mut speeds = Vec::new();
+        let path = drive(Pose2::new(0.0, 0.0, 0.0), 10.0, |p| {
+            let cmd = law.command(p, &goal);
+            speeds.push(cmd.speed_mps);
+            cmd
+        });
+        let end = path.last().expect("a path");
+        assert!(
+            (end.x - 2.0).abs() < 0.005 && end.y.abs() < 0.005,
+            "{end:?}"
+        );
+        // No step asks for harder braking than planned, until the stop at
+        // the goal itself.
+        let moving: Vec<f64> = speeds.iter().copied().take_while(|&v| v > 0.0).collect();
+        for w in moving.windows(2) {
+            assert!(w[0] - w[1] <= 1.1 * STOP_DECEL_MPS2 * 0.01, "{w:?}");
+        }
+        // Up to speed, on at 0.8 m/s, braking over the last 0.8 m: 3.9 s,
+        // where slowing in proportion to the distance left over the last
+        // 0.6 m crept up on the goal in 5.2 s.
+        let arrived_s = moving.len() as f64 * 0.01;
+        assert!(arrived_s < 4.5, "{arrived_s} s");
     }
 
     #[test]

@@ -9,6 +9,25 @@ use stucco_core::{DriveCommand, Pose2, Stamp, VehicleSpec, wrap_angle};
 
 /// Heading error a pivot stops at, rad.
 const PIVOT_TOLERANCE_RAD: f64 = 0.01;
+/// Share of the top speed the front wheel runs at, across, in a pivot.
+const PIVOT_WHEEL_SHARE: f64 = 0.75;
+/// Share of the drive's acceleration a pivot brakes with, so the wheel,
+/// which can brake harder, is sure to stop it on its heading.
+const PIVOT_BRAKE_SHARE: f64 = 0.6;
+/// Slowest turn of a pivot, rad/s: the last hundredths of a radian.
+const PIVOT_CREEP_RADPS: f64 = 0.05;
+
+/// The turning rate of a pivot `left_rad` short of its heading, rad/s:
+/// as fast as the front wheel, across, may run, and no faster than
+/// braking at [`PIVOT_BRAKE_SHARE`] of the drive's deceleration stops it
+/// on the heading (ω = v / wheelbase with the wheel across).
+fn pivot_rate(left_rad: f64, vehicle: &VehicleSpec) -> f64 {
+    let top = PIVOT_WHEEL_SHARE * vehicle.max_speed_mps / vehicle.wheelbase_m;
+    let brake = PIVOT_BRAKE_SHARE * vehicle.max_accel_mps2 / vehicle.wheelbase_m;
+    let to_stop = (left_rad - 0.5 * PIVOT_TOLERANCE_RAD).max(0.0);
+    (2.0 * brake * to_stop).sqrt().clamp(PIVOT_CREEP_RADPS, top)
+}
+
 /// A goal nearer than this needs no drive, only a turn, m.
 const NEAR_M: f64 = 0.05;
 /// A turn smaller than this is left to the line law, rad.
@@ -241,9 +260,7 @@ impl Behaviour {
                             self.started = Some(now);
                             return Step::Drive(DriveCommand::STOP);
                         }
-                        // ω = v / wheelbase with the wheel across; slow
-                        // near the heading.
-                        let omega = (1.5 * err.abs()).clamp(0.05, 0.6);
+                        let omega = pivot_rate(err.abs(), vehicle);
                         Step::Drive(DriveCommand {
                             speed_mps: omega * vehicle.wheelbase_m,
                             steer_rad: steer,
@@ -340,4 +357,42 @@ pub fn go_to(gains: &GainSchedule, from: &Pose2, goal: &Pose2, speed_mps: f64) -
         out.push(Behaviour::pivot(goal.theta));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A pivot of `turn_rad` on the kinematic tricycle, its wheel's speed
+    /// changing at most as fast as the drive allows: the seconds it turns
+    /// and where it stops from the heading.
+    fn pivot(turn_rad: f64) -> (f64, f64) {
+        let v = VehicleSpec::default();
+        let dt = 0.02;
+        let (mut left, mut omega, mut t) = (turn_rad, 0.0_f64, 0.0);
+        while left.abs() > PIVOT_TOLERANCE_RAD && t < 30.0 {
+            let goal = pivot_rate(left.abs(), &v).copysign(left);
+            let most = v.max_accel_mps2 / v.wheelbase_m * dt;
+            omega += (goal - omega).clamp(-most, most);
+            left -= omega * dt;
+            t += dt;
+        }
+        // Stopped there, the wheel still turns the robot on while it
+        // brakes as hard as it can.
+        let coast = omega * omega.abs() / (2.0 * v.max_accel_mps2 / v.wheelbase_m);
+        (t, (left - coast).abs())
+    }
+
+    #[test]
+    fn a_pivot_turns_fast_and_stops_on_its_heading() {
+        for turn in [0.05, 0.5, std::f64::consts::FRAC_PI_2, 3.0] {
+            let (t, off) = pivot(turn);
+            assert!(off <= PIVOT_TOLERANCE_RAD, "{turn} rad: {off} rad off");
+            // A quarter turn in 2.4 s, where slowing in proportion to the
+            // angle left took 4.1 s.
+            if turn == std::f64::consts::FRAC_PI_2 {
+                assert!(t < 2.6, "{t} s");
+            }
+        }
+    }
 }

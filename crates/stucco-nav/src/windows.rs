@@ -10,8 +10,11 @@
 //! ray on the wall and the first through the hole — exactly where a ray
 //! meets the sill's top or the lintel's underside inside the wall's
 //! thickness — and its left and right edges halfway between the last
-//! profile on the wall and the first through the hole. Windows seen on
-//! several passes are fused.
+//! profile on the wall and the first through the hole, each as uncertain
+//! as the two profiles are far apart. Windows seen on several passes are
+//! fused, each edge weighed by how tightly its profiles bracketed it: a
+//! pass swept fast (the robot turning on the spot) counts for little
+//! beside one driven slowly past the edge.
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -69,6 +72,28 @@ pub struct Window {
     pub sill_head_m: [f64; 2],
     /// Passes (tracks) fused into it.
     pub observations: usize,
+    /// Standard deviation of each edge along the wall, m: the spacing of
+    /// the profiles either side of it (the edge lies anywhere between
+    /// them), with the camera's own position error; fused passes narrow
+    /// it.
+    #[serde(default = "unknown_edge_sigma")]
+    pub along_sigma_m: [f64; 2],
+}
+
+/// Edge spread of a window kept without one (a checkpoint written before
+/// edges carried theirs): a profile step of a slow pass.
+fn unknown_edge_sigma() -> [f64; 2] {
+    [EDGE_SIGMA_FLOOR_M * 2.0; 2]
+}
+
+/// The least standard deviation of an edge, m: the camera's position
+/// error along the wall, however close its profiles fall.
+const EDGE_SIGMA_FLOOR_M: f64 = 0.005;
+
+/// Standard deviation of an edge lying anywhere between two profiles
+/// `spacing_m` apart (uniform over it), with the camera's position error.
+fn edge_sigma(spacing_m: f64) -> f64 {
+    (spacing_m * spacing_m / 12.0 + EDGE_SIGMA_FLOOR_M * EDGE_SIGMA_FLOOR_M).sqrt()
 }
 
 impl Window {
@@ -80,6 +105,20 @@ impl Window {
     /// Height, m.
     pub fn height_m(&self) -> f64 {
         self.sill_head_m[1] - self.sill_head_m[0]
+    }
+
+    /// Takes `other`'s edges along the wall in, each weighed by the
+    /// inverse of its variance, and its passes; sill and head stay.
+    pub fn fuse_edges(&mut self, other: &Window) {
+        for k in 0..2 {
+            let (a, b) = (
+                self.along_sigma_m[k].powi(-2),
+                other.along_sigma_m[k].powi(-2),
+            );
+            self.along_m[k] = (a * self.along_m[k] + b * other.along_m[k]) / (a + b);
+            self.along_sigma_m[k] = (a + b).sqrt().recip();
+        }
+        self.observations += other.observations;
     }
 
     /// True when the two share more than a border: one window seen twice.
@@ -238,22 +277,19 @@ impl WindowFinder {
         self.fuse(w);
     }
 
-    /// Adds `w`, averaged with a window found before in the same place.
+    /// Adds `w`, fused with a window found before in the same place: its
+    /// edges by their spread, its sill and head by passes.
     fn fuse(&mut self, w: Window) {
         let same = self.found.iter_mut().find(|f| f.overlaps(&w));
         match same {
             Some(f) => {
                 let (n, m) = (f.observations as f64, w.observations as f64);
                 let mix = |a: f64, b: f64| (a * n + b * m) / (n + m);
-                f.along_m = [
-                    mix(f.along_m[0], w.along_m[0]),
-                    mix(f.along_m[1], w.along_m[1]),
-                ];
                 f.sill_head_m = [
                     mix(f.sill_head_m[0], w.sill_head_m[0]),
                     mix(f.sill_head_m[1], w.sill_head_m[1]),
                 ];
-                f.observations += w.observations;
+                f.fuse_edges(&w);
             }
             None => self.found.push(w),
         }
@@ -274,10 +310,19 @@ fn close(t: &Track, after_m: Option<f64>, cfg: &WindowConfig) -> Option<Window> 
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
+    let spread = [
+        edge_sigma((first.along_m - before).abs()),
+        edge_sigma((after - last.along_m).abs()),
+    ];
     let w = Window {
         along_m: [lo, hi],
         sill_head_m: [median(&|g| g.z[0]), median(&|g| g.z[1])],
         observations: 1,
+        along_sigma_m: if a <= b {
+            spread
+        } else {
+            [spread[1], spread[0]]
+        },
     };
     (w.width_m() >= cfg.min_size_m && w.height_m() >= cfg.min_size_m).then_some(w)
 }
@@ -572,6 +617,34 @@ mod tests {
         }
         f.end_pass();
         assert!(f.windows().is_empty());
+    }
+
+    #[test]
+    fn a_pass_swept_fast_counts_for_little_beside_a_slow_one() {
+        let window = [1.0, 2.0, 0.8, 1.9];
+        let mut f = WindowFinder::new(WindowConfig::default());
+        // Profiles 15 cm apart (the robot turning on the spot): the left
+        // edge lies between 0.88 and 1.03, taken as 0.955.
+        for k in 0..14 {
+            let u = 0.43 + 0.15 * k as f64;
+            f.add(&profile(u, 0.7, window), &pose(u, 0.7));
+        }
+        f.end_pass();
+        assert!((f.windows()[0].along_m[0] - 0.955).abs() < 1e-9);
+        // 2.5 cm apart (driven past at half a metre a second).
+        for k in 0..80 {
+            let u = 0.41 + 0.025 * k as f64;
+            f.add(&profile(u, 0.7, window), &pose(u, 0.7));
+        }
+        f.end_pass();
+        let w = f.windows();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].observations, 2);
+        // Averaged pass for pass, the left edge would be 2.4 cm off.
+        for (edge, truth) in w[0].along_m.iter().zip([1.0, 2.0]) {
+            assert!((edge - truth).abs() < 0.005, "{w:?}");
+        }
+        assert!(w[0].along_sigma_m.iter().all(|&s| s < 0.009), "{w:?}");
     }
 
     #[test]
