@@ -183,7 +183,8 @@ pub const STOP_DECEL_MPS2: f64 = 0.4;
 pub fn stopping_speed(cruise_mps: f64, to_go_m: f64, decel_mps2: f64) -> f64 {
     (2.0 * decel_mps2 * to_go_m.max(0.0))
         .sqrt()
-        .clamp(0.05 * cruise_mps, cruise_mps)
+        .min(cruise_mps)
+        .max(0.05 * cruise_mps)
 }
 
 /// Reaches a goal pose: follows the line through the goal along its
@@ -428,11 +429,12 @@ mod tests {
         for w in moving.windows(2) {
             assert!(w[0] - w[1] <= 1.1 * STOP_DECEL_MPS2 * 0.01, "{w:?}");
         }
-        // Up to speed, on at 0.8 m/s, braking over the last 0.8 m: 3.9 s,
-        // where slowing in proportion to the distance left over the last
-        // 0.6 m crept up on the goal in 5.2 s.
+        // On at 0.8 m/s, braking over the last 0.8 m: 3.4 s (this drive's
+        // limiter bounds speed and steering, not acceleration), where
+        // slowing in proportion to the distance left over the last 0.6 m
+        // crept up on the goal in 4.7 s.
         let arrived_s = moving.len() as f64 * 0.01;
-        assert!(arrived_s < 4.5, "{arrived_s} s");
+        assert!(arrived_s < 4.0, "{arrived_s} s");
     }
 
     #[test]

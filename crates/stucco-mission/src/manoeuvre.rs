@@ -125,10 +125,11 @@ impl<'a> Space<'a> {
             })
             .collect();
         // The field's length past a move's end: its margin, and what the
-        // speed a move ends at adds to it — a turn's wheel slows to
-        // 0.05 rad/s about the rear axle, and a run to a twentieth of its
-        // speed, which matches that creep at runs of 0.6 m/s (faster runs
-        // end a little faster: the plan margin takes it).
+        // speed a move ends at adds to it, taken as 0.05 rad/s about the
+        // rear axle (0.03 m/s at the wheel). A pivot braking evenly onto
+        // its heading ends at about 0.09 rad/s and a run at about 0.04 m/s:
+        // the field then reaches 3–4 mm further, which the plan margin
+        // takes.
         let creep = 0.05 * vehicle.wheelbase_m;
         let field =
             safety.obstacle_margin_m + creep * creep / (2.0 * safety.stop_decel_mps2) + 0.1 * creep;

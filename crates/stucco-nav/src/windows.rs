@@ -272,7 +272,8 @@ impl WindowFinder {
     }
 
     /// Takes `w` as found before (a window a checkpoint kept): later
-    /// passes over it are averaged in, weighed by its observations.
+    /// passes over it are fused in, its edges by their spread and its sill
+    /// and head by its observations.
     pub fn know(&mut self, w: Window) {
         self.fuse(w);
     }
@@ -645,6 +646,18 @@ mod tests {
             assert!((edge - truth).abs() < 0.005, "{w:?}");
         }
         assert!(w[0].along_sigma_m.iter().all(|&s| s < 0.009), "{w:?}");
+    }
+
+    #[test]
+    fn a_window_kept_before_edges_carried_their_spread_is_read_as_one_slow_pass() {
+        let w: Window = serde_json::from_str(
+            r#"{"along_m": [1.0, 2.0], "sill_head_m": [0.9, 2.1], "observations": 3}"#,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(w.along_sigma_m, unknown_edge_sigma());
+        let mut f = WindowFinder::new(WindowConfig::default());
+        f.know(w);
+        assert_eq!(f.windows()[0].along_m, [1.0, 2.0]);
     }
 
     #[test]
