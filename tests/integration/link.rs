@@ -119,17 +119,30 @@ fn an_operator_commands_a_robot_over_zenoh() {
 fn an_operator_watches_a_robot() {
     let dir = tempfile::tempdir().unwrap();
     let (robot, peer) = robot_on_socket(dir.path(), 4.0);
+    // Each watcher says when its first line came: it is subscribed, and
+    // the command's events will reach it (a fixed wait lost the
+    // task_started event on a loaded machine).
+    let (ready, watching) = std::sync::mpsc::channel::<()>();
     let watcher = |json: bool| {
         let peer = peer.clone();
+        let ready = ready.clone();
         std::thread::spawn(move || {
             let op = Operator::connect(&peer, "vic").unwrap();
             let mut lines = Vec::new();
-            op.watch("r1", Some(8.0), json, |l| lines.push(l)).unwrap();
+            op.watch("r1", Some(8.0), json, |l| {
+                if lines.is_empty() {
+                    let _ = ready.send(());
+                }
+                lines.push(l);
+            })
+            .unwrap();
             lines
         })
     };
     let (person, program) = (watcher(false), watcher(true));
-    std::thread::sleep(Duration::from_millis(500));
+    for _ in 0..2 {
+        watching.recv_timeout(Duration::from_secs(5)).unwrap();
+    }
     let mut op = Operator::connect(&peer, "ann").unwrap();
     forward_done(&mut op, "r1", 0.3);
     let person = person.join().unwrap();

@@ -745,9 +745,10 @@ fn run_once(
             save(&exec, &nav)?;
         }
         // The plan scored is each task's last one (a survey makes it
-        // again); a resumed run's, the one it took up.
+        // again, and a window the tool's camera finds is kept out of it);
+        // a resumed run's, the one it took up.
         let made = out_.events.iter().find_map(|e| match e.kind {
-            EventKind::PlanMade { task, .. } => Some(task),
+            EventKind::PlanMade { task, .. } | EventKind::WindowFound { task, .. } => Some(task),
             _ => None,
         });
         let taken_up = resume
