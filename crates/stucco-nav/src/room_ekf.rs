@@ -76,6 +76,9 @@ pub struct ScanUpdate {
     pub rejected: usize,
     /// Doors used, by their index in the state.
     pub doors_used: Vec<usize>,
+    /// The scan was stamped before the filter's last measurement and was
+    /// left out: the filter takes measurements in time order.
+    pub late: bool,
 }
 
 /// An innovation: squared Mahalanobis distance, innovation, inverse of
@@ -231,8 +234,20 @@ impl RoomEkf {
     /// estimate through the odometry up to `stamp`, associates each wall
     /// with the room wall it predicts nearest and each opening with the
     /// door it predicts nearest (within the gate), and updates. The samples
-    /// after `stamp` stay pending for [`RoomEkf::now`].
+    /// after `stamp` stay pending for [`RoomEkf::now`]. A scan stamped
+    /// before the last one taken is left out (and reported `late`).
     pub fn scan(&mut self, stamp: Stamp, walls: &[Wall], doors: &[DoorOpening]) -> ScanUpdate {
+        if stamp < self.at {
+            // Its walls were seen from where the robot stood then, and the
+            // estimate is already past that: fused now, they would pull it
+            // back by the motion since (a degree in 20 ms of a 1 rad/s
+            // pivot).
+            return ScanUpdate {
+                rejected: walls.len(),
+                late: true,
+                ..ScanUpdate::default()
+            };
+        }
         let n = self.pending.iter().take_while(|s| s.stamp <= stamp).count();
         let d = self.displacement(n, Some(stamp));
         let (mut x, mut p) = predict(&self.x, &self.p, &d);
@@ -589,5 +604,49 @@ mod tests {
         let person = wall(walls[2].d_m - 1.0, walls[2].gamma_rad);
         let r = ekf.scan(Stamp::from_secs_f64(1.0), &[person], &[]);
         assert_eq!((r.used.len(), r.rejected), (0, 1));
+    }
+
+    #[test]
+    fn a_scan_stamped_before_the_last_measurement_is_left_out() {
+        // The robot pivots at 1 rad/s; the camera's wall, stamped now, is
+        // taken before a laser scan stamped 100 ms earlier comes in.
+        let mount = Pose2::new(0.35, 0.0, 0.0);
+        let odometry = OdometryConfig::default();
+        let cfg = RoomEkfConfig::new(odometry.clone(), mount);
+        let x0 = RoomState::new(2.0, 1.5, 0.0, 5.45, 5.64);
+        let p0 =
+            RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(1e-6, 1e-6, 1e-4, 1e-6, 1e-6));
+        let mut ekf = RoomEkf::new(cfg, x0, p0, Stamp::ZERO);
+        // Rear wheels turning the robot on the spot at 1 rad/s.
+        let per_m = f64::from(odometry.ticks_per_rev)
+            / (std::f64::consts::TAU * odometry.wheel_radius_m[0]);
+        let at = |t: f64| {
+            let wheel = 0.5 * odometry.track_m * t;
+            EncoderSample {
+                stamp: Stamp::from_secs_f64(t),
+                left_ticks: (-wheel * per_m).round() as i64,
+                right_ticks: (wheel * per_m).round() as i64,
+            }
+        };
+        for k in 0..=10 {
+            ekf.odometry(at(0.02 * k as f64));
+        }
+        let truth = |t: f64| DVector::from_vec(vec![2.0, 1.5, t, 5.45, 5.64]);
+        // Walls whose direction is loosely known (a short piece): one
+        // taken at the wrong time would be let through and pull.
+        let seen = |t: f64| {
+            let (z, _) = observe(&truth(t), 0, &mount);
+            Wall {
+                covariance: Matrix2::new(1e-5, 0.0, 0.0, 1e-2),
+                ..wall(z.x, z.y)
+            }
+        };
+        let now = ekf.scan(Stamp::from_secs_f64(0.2), &[seen(0.2)], &[]);
+        assert_eq!((now.used.len(), now.late), (1, false), "{now:?}");
+        let before = ekf.at_last_scan().0.clone();
+        let late = ekf.scan(Stamp::from_secs_f64(0.1), &[seen(0.1)], &[]);
+        assert!(late.late && late.used.is_empty(), "{late:?}");
+        assert_eq!(ekf.at_last_scan().0, &before);
+        assert!((ekf.now().0[2] - 0.2).abs() < 1e-3, "{}", ekf.now().0);
     }
 }

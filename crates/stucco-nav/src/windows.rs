@@ -137,6 +137,12 @@ struct Gap {
     z: [f64; 2],
 }
 
+/// Least distance along the wall between two profiles a pass takes in, m:
+/// a tenth of the 2.5 cm between profiles of a look (the tool's camera,
+/// 20 a second, at 0.5 m/s), while the camera on a robot standing still
+/// looks at the same place over and over.
+const MIN_STEP_M: f64 = 0.0025;
+
 /// A window being followed from profile to profile.
 #[derive(Clone, Debug)]
 struct Track {
@@ -181,6 +187,14 @@ impl WindowFinder {
         // the wall the fan meets it.
         let to_face = pose.distance_m / c;
         let along = pose.along_m + pose.direction.y * to_face;
+        // A camera standing still sees nothing new, and a stray profile
+        // among its many alike must not end a window where it stands.
+        if self
+            .last_along_m
+            .is_some_and(|last| (along - last).abs() < MIN_STEP_M)
+        {
+            return;
+        }
         let (gaps, rays) = gaps_in(profile, pose, to_face, cfg);
         // Continue the tracks whose heights a gap overlaps; start new ones.
         let mut used = vec![false; gaps.len()];
@@ -600,6 +614,34 @@ mod tests {
         // spacing, 1.4 cm.
         assert!((w.sill_head_m[1] - 2.1).abs() < 1e-9, "{w:?}");
         assert!((w.sill_head_m[0] - 0.9).abs() <= 0.007, "{w:?}");
+    }
+
+    #[test]
+    fn a_camera_standing_still_in_front_of_a_window_does_not_end_it_there() {
+        // A robot stops in front of a window for a minute (a ceiling pass)
+        // and one of its 1,200 profiles misses the hole (its sill
+        // flickers), then it drives on past the window's far edge.
+        let window = [1.8, 3.2, 0.9, 2.1];
+        let mut f = WindowFinder::new(WindowConfig::default());
+        let step = 0.025;
+        let mut u = 1.5;
+        while u < 2.8 {
+            f.add(&profile(u, 0.7, window), &pose(u, 0.7));
+            u += step;
+        }
+        for k in 0..1200 {
+            let seen = if k == 600 { [0.0; 4] } else { window };
+            f.add(&profile(u, 0.7, seen), &pose(u, 0.7));
+        }
+        while u < 3.5 {
+            f.add(&profile(u, 0.7, window), &pose(u, 0.7));
+            u += step;
+        }
+        let w = f.windows();
+        assert_eq!(w.len(), 1, "{w:?}");
+        for (got, want) in w[0].along_m.iter().zip(&window[..2]) {
+            assert!((got - want).abs() <= step / 2.0 + 1e-9, "{w:?}");
+        }
     }
 
     #[test]

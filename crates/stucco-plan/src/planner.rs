@@ -126,6 +126,58 @@ impl Pass {
         self.moves = out;
     }
 
+    /// Takes a wall pass's strokes again in the planner's order, from
+    /// what it sprays: once [`Pass::spray_off_inside`] has cut strokes
+    /// across a window, they are taken below it and then above it, as the
+    /// planner takes strokes across a window it knows, instead of crossing
+    /// it spray off at the strokes' speed. Nothing changes on a pass whose
+    /// sprayed moves are not vertical strokes.
+    pub fn restroke(&mut self, axis_speed_mps: f64) {
+        self.restroke_from(axis_speed_mps, self.starts_up());
+    }
+
+    /// True when the pass's first stroke runs up (or it has none).
+    fn starts_up(&self) -> bool {
+        self.moves
+            .iter()
+            .find(|m| m.spray)
+            .is_none_or(|m| m.to_m[1] >= m.from_m[1])
+    }
+
+    /// [`Pass::restroke`], the first stroke up the wall when `up`, else
+    /// down it.
+    fn restroke_from(&mut self, axis_speed_mps: f64, up: bool) {
+        let mut lines: Vec<(f64, Line)> = Vec::new();
+        for m in self.moves.iter().filter(|m| m.spray) {
+            if m.from_m[0] != m.to_m[0] {
+                return;
+            }
+            let piece = if m.from_m[1] <= m.to_m[1] {
+                (m.from_m, m.to_m)
+            } else {
+                (m.to_m, m.from_m)
+            };
+            match lines.iter_mut().find(|(u, _)| *u == m.from_m[0]) {
+                Some((_, line)) => line.pieces.push(piece),
+                None => lines.push((
+                    m.from_m[0],
+                    Line {
+                        pieces: vec![piece],
+                        speed_mps: m.speed_mps,
+                    },
+                )),
+            }
+        }
+        let lines: Vec<Line> = lines
+            .into_iter()
+            .map(|(_, mut line)| {
+                line.pieces.sort_by(|a, b| a.0[1].total_cmp(&b.0[1]));
+                line
+            })
+            .collect();
+        self.moves = boustrophedon(&lines, axis_speed_mps, up);
+    }
+
     /// Duration, s.
     pub fn duration_s(&self) -> f64 {
         self.moves.iter().map(Move::duration_s).sum()
@@ -317,9 +369,47 @@ impl Plan {
         for station in self.stations.iter_mut().skip(from) {
             for pass in station.passes.iter_mut().filter(|p| p.surface == id) {
                 pass.spray_off_inside(&keep_out);
+                pass.restroke(self.tool.axis_speed_mps);
             }
         }
         true
+    }
+
+    /// Turns a station's wall pass upside down where it then ends nearer
+    /// the station's next pass: strokes taken alternately up and down end
+    /// at the foot of the wall when there are as many up as down, while
+    /// the ceiling pass that follows begins under the ceiling, the lift's
+    /// whole travel away.
+    fn end_wall_passes_near_the_next(&mut self) {
+        let axis = self.tool.axis_speed_mps;
+        // How far the nozzle's slowest axis has to go from the end of
+        // `pass` to `to`, m.
+        let gap = |plan: &Plan, pass: &Pass, to: nalgebra::Point3<f64>| {
+            pass.moves
+                .last()
+                .and_then(|m| plan.nozzle_point(pass.surface, m.to_m))
+                .map_or(f64::INFINITY, |p| (p - to).amax())
+        };
+        for k in 0..self.stations.len() {
+            for i in 1..self.stations[k].passes.len() {
+                let (pass, next) = (&self.stations[k].passes[i - 1], &self.stations[k].passes[i]);
+                let Some(to) = next
+                    .moves
+                    .first()
+                    .and_then(|m| self.nozzle_point(next.surface, m.from_m))
+                else {
+                    continue;
+                };
+                if matches!(pass.surface, SurfaceId::Ceiling) {
+                    continue;
+                }
+                let mut turned = pass.clone();
+                turned.restroke_from(axis, !pass.starts_up());
+                if gap(self, &turned, to) < gap(self, pass, to) - 1e-9 {
+                    self.stations[k].passes[i - 1] = turned;
+                }
+            }
+        }
     }
 
     /// Every pass with the index of its station.
@@ -447,14 +537,16 @@ pub fn plan(
         }
         reach.push(mask);
     }
-    Ok(Plan {
+    let mut plan = Plan {
         tool: tool.clone(),
         room: room.clone(),
         surfaces,
         stations,
         reach,
         unreachable,
-    })
+    };
+    plan.end_wall_passes_near_the_next();
+    Ok(plan)
 }
 
 /// The robot's footprint, in its own frame.
@@ -807,45 +899,8 @@ impl Planner<'_> {
         Pass {
             surface,
             aim: Aim::Left,
-            moves: self.boustrophedon(&lines),
+            moves: boustrophedon(&lines, self.tool.axis_speed_mps, true),
         }
-    }
-
-    /// Moves over lines taken alternately forward and backward, with the
-    /// spray off between pieces.
-    fn boustrophedon(&self, lines: &[Line]) -> Vec<Move> {
-        let mut moves: Vec<Move> = Vec::new();
-        let axis = self.tool.axis_speed_mps;
-        let mut at: Option<[f64; 2]> = None;
-        for (i, line) in lines.iter().enumerate() {
-            let mut pieces: Vec<([f64; 2], [f64; 2])> = line.pieces.clone();
-            if i % 2 == 1 {
-                pieces.reverse();
-                for p in &mut pieces {
-                    *p = (p.1, p.0);
-                }
-            }
-            for (from, to) in pieces {
-                if let Some(a) = at
-                    && (a[0] - from[0]).hypot(a[1] - from[1]) > 1e-9
-                {
-                    moves.push(Move {
-                        from_m: a,
-                        to_m: from,
-                        speed_mps: axis,
-                        spray: false,
-                    });
-                }
-                moves.push(Move {
-                    from_m: from,
-                    to_m: to,
-                    speed_mps: line.speed_mps,
-                    spray: true,
-                });
-                at = Some(to);
-            }
-        }
-        moves
     }
 
     /// The ceiling's strokes: lines along x at these y, m, with their
@@ -1003,7 +1058,7 @@ impl Planner<'_> {
                 station.passes.push(Pass {
                     surface: SurfaceId::Ceiling,
                     aim: Aim::Up,
-                    moves: self.boustrophedon(&lines),
+                    moves: boustrophedon(&lines, self.tool.axis_speed_mps, true),
                 });
             }
         }
@@ -1015,6 +1070,58 @@ impl Planner<'_> {
 struct Line {
     pieces: Vec<([f64; 2], [f64; 2])>,
     speed_mps: f64,
+}
+
+/// Moves over `lines`, the spray off between pieces at the axes' speed.
+/// Consecutive lines cut into as many pieces each (strokes across a
+/// window: below it and above it) are taken tier by tier, every line's
+/// first piece and then every line's second, so the nozzle crosses the
+/// opening once rather than once a stroke. Within a tier the lines are
+/// taken alternately forward and backward, the first from the end nearer
+/// the nozzle (the very first forward when `forward_first`, else
+/// backward).
+fn boustrophedon(lines: &[Line], axis_speed_mps: f64, forward_first: bool) -> Vec<Move> {
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let mut moves: Vec<Move> = Vec::new();
+    let mut at: Option<[f64; 2]> = None;
+    let mut first = 0;
+    while first < lines.len() {
+        let k = lines[first].pieces.len();
+        let run = &lines[first
+            ..first
+                + lines[first..]
+                    .iter()
+                    .take_while(|l| l.pieces.len() == k)
+                    .count()];
+        first += run.len();
+        for tier in 0..k {
+            let (a, b) = run[0].pieces[tier];
+            let mut forward = at.map_or(forward_first, |p| dist(p, a) <= dist(p, b));
+            for line in run {
+                let (a, b) = line.pieces[tier];
+                let (from, to) = if forward { (a, b) } else { (b, a) };
+                if let Some(p) = at
+                    && dist(p, from) > 1e-9
+                {
+                    moves.push(Move {
+                        from_m: p,
+                        to_m: from,
+                        speed_mps: axis_speed_mps,
+                        spray: false,
+                    });
+                }
+                moves.push(Move {
+                    from_m: from,
+                    to_m: to,
+                    speed_mps: line.speed_mps,
+                    spray: true,
+                });
+                at = Some(to);
+                forward = !forward;
+            }
+        }
+    }
+    moves
 }
 
 /// Removes `hole` from the sorted, disjoint intervals `spans`.
@@ -1205,6 +1312,26 @@ mod tests {
         u1 > r.u_m[0] && u0 < r.u_m[1] && v1 > r.v_m[0] && v0 < r.v_m[1]
     }
 
+    /// How many moves of `pass` cross `r` spray off, from below it to
+    /// above it or back.
+    fn crossings(pass: &Pass, r: &Rect) -> usize {
+        pass.moves
+            .iter()
+            .filter(|m| {
+                let (lo, hi) = (m.from_m[1].min(m.to_m[1]), m.from_m[1].max(m.to_m[1]));
+                !m.spray && lo <= r.v_m[0] && hi >= r.v_m[1] && crosses(m.from_m, m.to_m, r)
+            })
+            .count()
+    }
+
+    /// Each move of `pass` starts where the last one ended.
+    fn assert_continuous(pass: &Pass) {
+        for w in pass.moves.windows(2) {
+            let gap = (w[0].to_m[0] - w[1].from_m[0]).hypot(w[0].to_m[1] - w[1].from_m[1]);
+            assert!(gap < 1e-9, "{w:?}");
+        }
+    }
+
     /// Every aim point lies on its surface, every spraying move stays
     /// `spray_off_m` clear of the openings, and the nozzle reaches every
     /// aim point from its station with the gantry's travel less the
@@ -1214,6 +1341,7 @@ mod tests {
         let (rail, arm) = (t.planned_rail_m(), t.planned_arm_m());
         for station in &p.stations {
             for pass in &station.passes {
+                assert_continuous(pass);
                 let s: &Surface = p.surface(pass.surface).expect("surface");
                 let [su, sv] = s.size_m();
                 for m in &pass.moves {
@@ -1249,6 +1377,21 @@ mod tests {
         let p = make(&room([4.0, 3.0], 2.5, Vec::new()));
         check_moves(&p);
         assert!(p.unreachable.is_empty(), "{:?}", p.unreachable);
+        // A wall pass followed by the ceiling's ends up the wall, not at
+        // its foot, whichever number of strokes it has.
+        let mut ends = Vec::new();
+        for s in &p.stations {
+            for q in s.passes.windows(2) {
+                if let (SurfaceId::Wall(_), SurfaceId::Ceiling) = (q[0].surface, q[1].surface) {
+                    let first = q[0].moves.first().expect("a stroke");
+                    let last = q[0].moves.last().expect("a stroke");
+                    assert!(last.to_m[1] > 1.5, "{last:?}");
+                    ends.push(first.to_m[1] > first.from_m[1]);
+                }
+            }
+        }
+        // Some begin at the top, some at the foot.
+        assert!(ends.contains(&true) && ends.contains(&false), "{ends:?}");
         let s = predicted_score(&p);
         assert!(s.wall_coverage_pct >= 99.9, "{s:?}");
         assert!(s.ceiling_coverage_pct >= 99.9, "{s:?}");
@@ -1287,6 +1430,33 @@ mod tests {
         let s = predicted_score(&p);
         assert!(s.wall_coverage_pct >= 99.9, "{s:?}");
         assert!(s.overspray_pct <= 0.5 && s.overspray_pct > 0.0, "{s:?}");
+        // The strokes across the window are taken below it, then above
+        // it: the nozzle crosses it once a pass, not once a stroke.
+        let window = p
+            .surface(SurfaceId::Wall(WallName::South))
+            .expect("wall")
+            .openings[0]
+            .rect;
+        let across: Vec<&Pass> = p
+            .passes()
+            .map(|(_, q)| q)
+            .filter(|q| q.surface == SurfaceId::Wall(WallName::South))
+            .filter(|q| {
+                q.moves
+                    .iter()
+                    .any(|m| m.spray && m.from_m[0] > window.u_m[0] && m.from_m[0] < window.u_m[1])
+            })
+            .collect();
+        assert!(!across.is_empty());
+        for q in &across {
+            assert!(crossings(q, &window) <= 1, "{q:?}");
+        }
+        // Taken again from what they spray, the passes are as planned.
+        for (_, q) in p.passes() {
+            let mut again = q.clone();
+            again.restroke(p.tool.axis_speed_mps);
+            assert_eq!(&again, q);
+        }
     }
 
     #[test]
@@ -1473,14 +1643,37 @@ mod tests {
         .grown(p.tool.spray_off_m - 1e-9);
         for (k, (a, b)) in before.stations.iter().zip(&p.stations).enumerate() {
             for (qa, qb) in a.passes.iter().zip(&b.passes) {
-                // Every pass takes as long as it did.
-                assert!((qa.duration_s() - qb.duration_s()).abs() < 1e-9);
                 let sprays_in = qb
                     .moves
                     .iter()
                     .any(|m| m.spray && keep_out.clip(m.from_m, m.to_m).is_some());
                 if qb.surface == id && k >= from {
                     assert!(!sprays_in, "station {k} sprays into the window");
+                    // All it sprayed outside the window it still sprays,
+                    // in one go: below the window, then above it, the
+                    // window crossed once, spray off.
+                    let outside = |q: &Pass| -> f64 {
+                        q.moves
+                            .iter()
+                            .filter(|m| m.spray)
+                            .map(|m| {
+                                let inside = keep_out.clip(m.from_m, m.to_m);
+                                m.length_m() * (1.0 - inside.map_or(0.0, |[t0, t1]| t1 - t0))
+                            })
+                            .sum()
+                    };
+                    assert!((outside(qa) - outside(qb)).abs() < 1e-6, "station {k}");
+                    assert!(crossings(qb, &keep_out) <= 1, "station {k}: {qb:?}");
+                    let sprayed_in = qa
+                        .moves
+                        .iter()
+                        .any(|m| m.spray && keep_out.clip(m.from_m, m.to_m).is_some());
+                    if sprayed_in {
+                        assert!(qb.duration_s() < qa.duration_s(), "station {k}");
+                    } else {
+                        assert_eq!(qa, qb, "station {k}");
+                    }
+                    assert_continuous(qb);
                 } else {
                     // Before the station it was found at, and elsewhere:
                     // as planned.
