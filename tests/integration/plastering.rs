@@ -1,5 +1,5 @@
-//! The demo: plastering the apartment's living room in the simulator
-//! (`missions/demo.toml`): mapped, surveyed, planned on what the
+//! Plastering in the simulator: the apartment's living room
+//! (`missions/living-room.toml`): mapped, surveyed, planned on what the
 //! robot found, sprayed, and scored on the true walls and ceiling against
 //! ACCEPTANCE.md; and the same job killed halfway and resumed from its
 //! checkpoint, spraying nothing twice.
@@ -12,7 +12,7 @@ fn mission(name: &str) -> PathBuf {
 }
 
 fn run(out: &Path, resume: bool, stop_after_s: Option<f64>) -> MissionReport {
-    run_file("demo", out, resume, stop_after_s)
+    run_file("living-room", out, resume, stop_after_s)
 }
 
 fn run_file(name: &str, out: &Path, resume: bool, stop_after_s: Option<f64>) -> MissionReport {
@@ -192,7 +192,7 @@ fn two_offices_are_plastered_one_after_the_other_within_the_targets() {
     );
 }
 
-/// The apartment as one job (`missions/apartment-plaster.toml`): the
+/// The demo, the apartment as one job (`missions/demo.toml`): the
 /// living room, then through the 1.2 m hall the kitchen (a counter along
 /// one wall, a column in a corner) and the bedroom (a bed and a desk
 /// across it), each mapped, surveyed, planned and plastered to the end
@@ -203,7 +203,7 @@ fn two_offices_are_plastered_one_after_the_other_within_the_targets() {
 #[test]
 fn the_apartments_living_room_kitchen_and_bedroom_are_plastered_in_one_job() {
     let dir = tempfile::tempdir().unwrap();
-    let r = run_file("apartment-plaster", dir.path(), false, None);
+    let r = run_file("demo", dir.path(), false, None);
     assert_eq!(r.outcome, "done", "{:?}", r.reason);
     let plaster = r.plaster.as_ref().unwrap();
     let rooms: Vec<&str> = plaster.rooms.iter().map(|p| p.room.as_str()).collect();
