@@ -9,11 +9,15 @@
 //! stroke where the band it coats ends `spray_off_m` short of each opening,
 //! so the coat is even across stations and full up to every opening's
 //! margin; a stroke crossing an opening stops spraying `spray_off_m` before
-//! it and starts again past it. The ceiling is coated with strokes along the room's x
-//! axis from the same stations (the nozzle turned up, the arm reaching
-//! across) and from lanes down the middle where the walls' stations do not
-//! reach; where one station's share of a stroke ends the next one's
-//! begins, so their edges add up to the full coat.
+//! it and starts again past it, and strokes cut so are taken below the
+//! opening first, then above it, so the nozzle crosses it once; a wall
+//! pass is turned to end at the top of the wall, where the ceiling pass
+//! that follows begins, when that is nearer. The ceiling is coated with
+//! strokes along the room's x axis from the same stations (the nozzle
+//! turned up, the arm reaching across) and from lanes down the middle
+//! where the walls' stations do not reach; where one station's share of a
+//! stroke ends the next one's begins, so their edges add up to the full
+//! coat.
 //!
 //! Reach is honest: a part of a surface no station can reach (behind a
 //! sofa, under a radiator, too high for the lift) is not planned and is
