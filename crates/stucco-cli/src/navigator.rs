@@ -580,6 +580,9 @@ impl Navigator {
                     .map(|d| (d.wall, vx[d.index], vp[(d.index, d.index)].max(0.0).sqrt()))
                     .collect();
                 view.ekf = RoomEkf::new(config, x0, p0, stamp);
+                // Walls the camera measured as the robot left are older
+                // than the new filter: it would leave them out.
+                view.camera_walls.clear();
                 let info = std::mem::take(&mut view.door_info);
                 for ((wall, position, sigma), info) in doors.into_iter().zip(info) {
                     view.add_door(wall, position, sigma, info);
@@ -671,11 +674,8 @@ impl Navigator {
             self.look_for_windows(profile);
         }
         // The camera's walls no scan still to come was stamped before.
-        let lag = Stamp::from_nanos((self.scan_lag_s * 1e9).round() as i64);
-        if now > lag {
-            self.room
-                .camera_walls_until(Stamp::from_nanos(now.as_nanos() - lag.as_nanos()));
-        }
+        self.room
+            .camera_walls_until(now.offset_secs(-self.scan_lag_s));
         // The samples before the last scan are spent.
         if let Some(last) = r.scans.last() {
             let keep = self.samples.iter().rposition(|s| s.stamp <= last.stamp);
@@ -1058,12 +1058,6 @@ mod tests {
         merge_furniture(&mut out);
         assert_eq!(out.len(), 2);
     }
-}
-
-#[cfg(test)]
-#[allow(clippy::expect_used)]
-mod pivot_tests {
-    use super::*;
 
     /// The robot pivots at 1 rad/s from the apartment's start, where no
     /// wall has been seen by the laser often enough yet, so the body's
@@ -1073,6 +1067,7 @@ mod pivot_tests {
     /// as they came, each scan was fused against a state 0.1 s on, and a
     /// pivot left the heading degrees off.)
     #[test]
+    #[allow(clippy::expect_used)]
     fn a_fast_pivot_with_the_camera_measuring_walls_keeps_the_heading() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../sim/worlds/apartment.toml");

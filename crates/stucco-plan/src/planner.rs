@@ -397,6 +397,9 @@ impl Plan {
         for k in 0..self.stations.len() {
             for i in 1..self.stations[k].passes.len() {
                 let (pass, next) = (&self.stations[k].passes[i - 1], &self.stations[k].passes[i]);
+                if matches!(pass.surface, SurfaceId::Ceiling) {
+                    continue;
+                }
                 let Some(to) = next
                     .moves
                     .first()
@@ -404,9 +407,6 @@ impl Plan {
                 else {
                     continue;
                 };
-                if matches!(pass.surface, SurfaceId::Ceiling) {
-                    continue;
-                }
                 let mut turned = pass.clone();
                 turned.restroke_from(axis, !pass.starts_up());
                 if gap(self, &turned, to) < gap(self, pass, to) - 1e-9 {
