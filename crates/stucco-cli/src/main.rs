@@ -747,6 +747,12 @@ fn print_run(r: &MissionReport) {
             pct(r.mission_time_s),
             pct(r.mission_time_lower_bound_s)
         );
+        for left in &p.rooms_left {
+            println!(
+                "  not plastered: {} ({:.1} m² of floor): {}",
+                left.room, left.floor_m2, left.why
+            );
+        }
     }
 }
 

@@ -138,6 +138,19 @@ pub struct PlasterReport {
     pub sprayed_l: f64,
     /// Each room plastered, in the order of its `plaster` task.
     pub rooms: Vec<RoomPlaster>,
+    /// The floor plan's rooms no `plaster` task plastered.
+    pub rooms_left: Vec<RoomLeft>,
+}
+
+/// A room of the floor plan the run did not plaster.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoomLeft {
+    /// Its name on the plan.
+    pub room: String,
+    /// Its floor (and ceiling) as drawn, m².
+    pub floor_m2: f64,
+    /// Why: every door of it is shut, or no task plastered it.
+    pub why: String,
 }
 
 /// One room's plastering.

@@ -105,6 +105,31 @@ pub struct PassReport {
     pub samples: usize,
 }
 
+/// The rooms of `mission`'s floor plan none of `plastered` is, each with
+/// its drawn floor and why.
+fn rooms_left(
+    mission: &Mission,
+    plastered: &[crate::plastering::RoomPlaster],
+) -> Vec<crate::plastering::RoomLeft> {
+    let Some(plan) = mission.floor_plan() else {
+        return Vec::new();
+    };
+    plan.rooms()
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| !plastered.iter().any(|p| p.room == r.name))
+        .map(|(i, r)| crate::plastering::RoomLeft {
+            room: r.name.clone(),
+            floor_m2: r.size_m[0] * r.size_m[1],
+            why: if plan.doors_of(i).next().is_none() {
+                "every door of it is shut".to_owned()
+            } else {
+                "no plaster task".to_owned()
+            },
+        })
+        .collect()
+}
+
 /// An opening the camera finds this near the floor is a door, m.
 const DOOR_SILL_M: f64 = 0.1;
 /// The plan a plastering run carries out, beside its checkpoint.
@@ -203,7 +228,8 @@ pub struct MissionReport {
     /// Plasterable area thicker than the tolerance allows (sprayed twice),
     /// %.
     pub double_sprayed_pct: Option<f64>,
-    /// Time the `plaster` task took (this run), s.
+    /// Time the `plaster` tasks took, over every part of the run (a
+    /// resumed run counts the parts before it), s.
     pub mission_time_s: Option<f64>,
     /// The least it could take: area at the tool's rate plus straight
     /// travel between stations at top speed, s.
@@ -267,6 +293,11 @@ pub struct Checkpoint {
     /// Where the simulated robot stood (world frame): a resumed run starts
     /// it there, as a robot switched off stays where it was.
     pub sim_pose: Pose2,
+    /// Seconds each task started has taken, over every part of the run
+    /// (one under way: so far), by task index: a resumed run reports the
+    /// whole job's plastering time.
+    #[serde(default)]
+    pub task_seconds: std::collections::BTreeMap<usize, f64>,
 }
 
 /// The room as the robot knew it at a checkpoint.
@@ -622,7 +653,10 @@ fn run_once(
         None => None,
     };
     let plan_written = std::cell::RefCell::new(String::new());
-    let save = |exec: &Executive, nav: &Navigator| -> Result<()> {
+    let save = |exec: &Executive,
+                nav: &Navigator,
+                task_seconds: std::collections::BTreeMap<usize, f64>|
+     -> Result<()> {
         if let Some(dir) = out {
             let progress = exec.progress();
             // The plan first, once: the checkpoint names it by digest.
@@ -650,6 +684,7 @@ fn run_once(
                     windows: nav.windows(),
                 },
                 sim_pose: nav.truth(),
+                task_seconds,
             };
             write_atomic(
                 &dir.join("checkpoint.json"),
@@ -664,6 +699,18 @@ fn run_once(
     let mut safety_stops = 0usize;
     let mut task_started: Vec<Option<Stamp>> = vec![None; exec.tasks().len()];
     let mut task_seconds: Vec<Option<f64>> = vec![None; exec.tasks().len()];
+    // Each task's seconds over every part of the run up to `now`: the
+    // parts before a resume, and this part's (a task under way: so far).
+    let earlier = resume.map(|cp| cp.task_seconds.clone()).unwrap_or_default();
+    let spent = |started: &[Option<Stamp>], ended: &[Option<f64>], now: Stamp| {
+        let mut all = earlier.clone();
+        for (t, (s, e)) in started.iter().zip(ended).enumerate() {
+            if let Some(secs) = e.or_else(|| s.map(|s| now.seconds_since(s))) {
+                *all.entry(t).or_insert(0.0) += secs;
+            }
+        }
+        all
+    };
     let mut time_out = None;
     let mut stopped = false;
     let mut recorder = match (out, record) {
@@ -742,13 +789,16 @@ fn run_once(
             events += 1;
         }
         if out_.checkpoint_due {
-            save(&exec, &nav)?;
+            save(&exec, &nav, spent(&task_started, &task_seconds, nav.now()))?;
         }
         // The plan scored is each task's last one (a survey makes it
-        // again, and a window the tool's camera finds is kept out of it);
-        // a resumed run's, the one it took up.
+        // again, a window the tool's camera finds is kept out of it, a
+        // station no way leads to is left out of it); a resumed run's, the
+        // one it took up.
         let made = out_.events.iter().find_map(|e| match e.kind {
-            EventKind::PlanMade { task, .. } | EventKind::WindowFound { task, .. } => Some(task),
+            EventKind::PlanMade { task, .. }
+            | EventKind::WindowFound { task, .. }
+            | EventKind::StationGivenUp { task, .. } => Some(task),
             _ => None,
         });
         let taken_up = resume
@@ -843,7 +893,8 @@ fn run_once(
     if let Some(r) = recorder {
         r.finish()?;
     }
-    save(&exec, &nav)?;
+    let task_spent = spent(&task_started, &task_seconds, nav.now());
+    save(&exec, &nav, task_spent.clone())?;
     if let Some(dir) = out
         && mission.spray.is_some()
     {
@@ -910,10 +961,11 @@ fn run_once(
             plans.values().map(|(f, p, _)| (f, p)).collect();
         let (score, each) = crate::plastering::score_run(nav.sim(), &layout, &rooms);
         let top = stucco_sim::SimConfig::default().vehicle.max_speed_mps;
-        // This run's plastering time (a resumed run's: its own part).
+        // The plastering time over every part of the run (a task stopped
+        // under way: so far).
         let seconds = plans
             .keys()
-            .filter_map(|&t| task_seconds.get(t).copied().flatten())
+            .filter_map(|t| task_spent.get(t).copied())
             .reduce(|a, b| a + b);
         let bound: f64 = plans
             .values()
@@ -1018,11 +1070,15 @@ fn run_once(
         double_sprayed_pct: plastered.as_ref().map(|p| p.0.over_pct),
         mission_time_s: plastered.as_ref().and_then(|p| p.2),
         mission_time_lower_bound_s: plastered.as_ref().map(|p| p.3),
-        plaster: plastered.map(|(score, rooms, _, _)| crate::plastering::PlasterReport {
-            stations: rooms.iter().map(|r| r.stations).sum(),
-            unreachable_m2: rooms.iter().map(|r| r.unreachable_m2).sum(),
-            sprayed_l: score.sprayed_l,
-            rooms,
+        plaster: plastered.map(|(score, rooms, _, _)| {
+            let rooms_left = rooms_left(mission, &rooms);
+            crate::plastering::PlasterReport {
+                stations: rooms.iter().map(|r| r.stations).sum(),
+                unreachable_m2: rooms.iter().map(|r| r.unreachable_m2).sum(),
+                sprayed_l: score.sprayed_l,
+                rooms,
+                rooms_left,
+            }
         }),
     };
     if let Some(dir) = out {

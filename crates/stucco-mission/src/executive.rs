@@ -261,6 +261,17 @@ pub enum EventKind {
         /// Its sill and head, m.
         sill_head_m: [f64; 2],
     },
+    /// No way to a plastering station keeps the body clear (a hall too
+    /// narrow to turn across): the station is left out of the plan, and
+    /// what only it reached is reported unreachable.
+    StationGivenUp {
+        /// The task.
+        task: usize,
+        /// The station's index in the plan before it was left out.
+        station: usize,
+        /// Plasterable area lost with it, m².
+        unreachable_m2: f64,
+    },
     /// A surface's pass at a station is sprayed.
     PassDone {
         /// The task.
@@ -1169,6 +1180,7 @@ impl Executive {
             .check(cmd, inputs.obstacles, inputs.estimate, dt);
         self.note_hazard(now, verdict.hazard);
         let safety = self.config.safety.clone();
+        let clearance = self.pivot_clearance();
         match verdict.hazard {
             Some(Hazard::Lost) => {
                 let since = *self.lost_since.get_or_insert(now);
@@ -1238,6 +1250,37 @@ impl Executive {
                         };
                         a.legs = Some(legs);
                         a.queue.clear();
+                        a.current = None;
+                        a.blocked_s = 0.0;
+                    }
+                    // On the way to a plastering station that no way
+                    // was found clear to (a hall too narrow to turn
+                    // across): the station is given up, what only it
+                    // reached reported unreachable, and the way to the
+                    // next one planned.
+                    if a.blocked_s > REPLAN_AFTER_S
+                        && let TaskSpec::Plaster { speed_mps, .. } = self.tasks[a.index]
+                        && let Some(run) = a.plaster.as_mut()
+                        && matches!(run.phase, Phase::Moving)
+                        && run.way_unchecked
+                    {
+                        let station = run.cursor.station;
+                        if let Some(lost) = run.give_up_station() {
+                            self.events.push(Event {
+                                stamp: now,
+                                kind: EventKind::StationGivenUp {
+                                    task: a.index,
+                                    station,
+                                    unreachable_m2: lost,
+                                },
+                            });
+                        }
+                        let from = inputs.estimate.pose;
+                        a.queue =
+                            next_station_way(&self.config, clearance, run, &from, speed_mps).into();
+                        if run.finished() {
+                            run.phase = Phase::Leaving;
+                        }
                         a.current = None;
                         a.blocked_s = 0.0;
                     }
@@ -1345,17 +1388,6 @@ impl Executive {
                 .as_ref()
                 .is_some_and(|(p, _)| p.task == index);
             let mut run = self.plaster_run(index, &walls, ceiling, region.as_ref(), est)?;
-            if survey && !resumed {
-                let (way, corner_to_corner) =
-                    survey_way(&self.config, clearance, est, survey_speed_mps);
-                queue.extend(way);
-                legs = corner_to_corner;
-                run.phase = Phase::Surveying;
-            } else {
-                let k = run.cursor.station;
-                let floor = floor_of(&run, &self.config.vehicle, clearance);
-                queue.extend(station_way(&self.config, &floor, &run, k, &pose, speed_mps));
-            }
             self.emit(
                 now,
                 EventKind::PlanMade {
@@ -1364,6 +1396,21 @@ impl Executive {
                     unreachable_m2: run.plan.unreachable.iter().map(|u| u.area_m2).sum(),
                 },
             );
+            if survey && !resumed {
+                let (way, corner_to_corner) =
+                    survey_way(&self.config, clearance, est, survey_speed_mps);
+                queue.extend(way);
+                legs = corner_to_corner;
+                run.phase = Phase::Surveying;
+            } else {
+                queue.extend(next_station_way(
+                    &self.config,
+                    clearance,
+                    &mut run,
+                    &pose,
+                    speed_mps,
+                ));
+            }
             plaster = Some(run);
         }
         let gains = &self.config.gains;
@@ -1724,12 +1771,7 @@ impl Executive {
             run.resume_s = p.in_move_s.max(0.0);
             return Ok(run);
         }
-        let plan = plan_room(
-            self.config.spray.as_ref(),
-            &self.config.vehicle,
-            (walls, ceiling, region),
-            est,
-        )?;
+        let plan = plan_room(&self.config, (walls, ceiling, region), est)?;
         Ok(PlasterRun::new(plan, Cursor::default()))
     }
 
@@ -1744,7 +1786,6 @@ impl Executive {
         (walls, ceiling, region): (&[WallName], bool, Option<&crate::task::Region>),
     ) -> TaskStep {
         let vehicle = self.config.vehicle.clone();
-        let spray_tool = self.config.spray.clone();
         let gains = self.config.gains.clone();
         let clearance = self.pivot_clearance();
         let dt = self.dt;
@@ -1786,11 +1827,10 @@ impl Executive {
                     None => {}
                 }
                 // Every wall seen from its standoff: plan on what was found.
-                let plan =
-                    match plan_room(spray_tool.as_ref(), &vehicle, (walls, ceiling, region), est) {
-                        Ok(p) => p,
-                        Err(e) => return TaskStep::Failed(e),
-                    };
+                let plan = match plan_room(&self.config, (walls, ceiling, region), est) {
+                    Ok(p) => p,
+                    Err(e) => return TaskStep::Failed(e),
+                };
                 let Some(run) = a.plaster.as_mut() else {
                     return TaskStep::Failed("plaster: no plan".to_owned());
                 };
@@ -1803,8 +1843,7 @@ impl Executive {
                     },
                 });
                 run.replan(plan);
-                let floor = floor_of(run, &vehicle, clearance);
-                let way = station_way(&self.config, &floor, run, 0, &est.pose, speed);
+                let way = next_station_way(&self.config, clearance, run, &est.pose, speed);
                 a.queue.extend(way);
                 self.tool = park;
                 TaskStep::Drive(DriveCommand::STOP)
@@ -2059,7 +2098,7 @@ impl Executive {
                                 _ => None,
                             })
                             .unwrap_or(est.pose);
-                        way.extend(station_way(&self.config, &floor, run, k, &from, speed));
+                        way.extend(next_station_way(&self.config, clearance, run, &from, speed));
                         run.phase = Phase::Moving;
                         a.queue.extend(way);
                         self.tool = park;
@@ -2282,15 +2321,15 @@ impl Executive {
 
 /// A plastering plan for `walls` (and the ceiling) on the room as `est`
 /// knows it. Openings the camera found come with their own top (one
-/// reaching the floor is a door); a door only the laser found gets the
-/// tool's `door_head_m`.
+/// reaching the floor is a door); a door only the laser found, or one the
+/// floor plan gives shut, has the top the plan gives it, else the tool's
+/// `door_head_m`.
 fn plan_room(
-    tool: Option<&SprayTool>,
-    vehicle: &VehicleSpec,
+    config: &ExecutiveConfig,
     (walls, ceiling, region): (&[WallName], bool, Option<&crate::task::Region>),
     est: &Estimate,
 ) -> Result<Plan, String> {
-    let Some(tool) = tool else {
+    let (Some(tool), vehicle) = (config.spray.as_ref(), &config.vehicle) else {
         return Err("plaster: the mission has no [spray] tool".to_owned());
     };
     let mut openings: Vec<WallOpening> = est
@@ -2311,6 +2350,11 @@ fn plan_room(
             },
         })
         .collect();
+    // A door's top as the drawing gives it, else the tool's guess.
+    let drawn_head = |door: Option<usize>| {
+        door.and_then(|i| config.floor.as_ref()?.doors().get(i)?.height_m)
+            .unwrap_or(tool.door_head_m)
+    };
     for d in &est.doors {
         let half = d.width_m.unwrap_or(0.9) / 2.0;
         let along = [d.position_m - half, d.position_m + half];
@@ -2329,8 +2373,35 @@ fn plan_room(
                 wall: d.wall,
                 kind: OpeningKind::Door,
                 along_m: along,
-                sill_head_m: [0.0, tool.door_head_m],
+                sill_head_m: [0.0, drawn_head(d.plan_door)],
             }),
+        }
+    }
+    // A shut door is no gap in a scan: the drawing gives it. What the
+    // camera saw of it (its frame, its leaf's edge) is taken in.
+    if let (Some(floor), Some(room)) = (config.floor.as_ref(), est.room) {
+        for (door, side) in floor.shut_doors_of(room) {
+            let half = floor.doors()[door].width_m / 2.0;
+            let mut shut = WallOpening {
+                wall: side.wall,
+                kind: OpeningKind::ShutDoor,
+                along_m: [side.along_m - half, side.along_m + half],
+                sill_head_m: [0.0, drawn_head(Some(door))],
+            };
+            openings.retain(|o| {
+                let apart = o.wall != shut.wall
+                    || o.along_m[1] <= shut.along_m[0]
+                    || shut.along_m[1] <= o.along_m[0];
+                if !apart {
+                    shut.along_m = [
+                        shut.along_m[0].min(o.along_m[0]),
+                        shut.along_m[1].max(o.along_m[1]),
+                    ];
+                    shut.sill_head_m[1] = shut.sill_head_m[1].max(o.sill_head_m[1]);
+                }
+                apart
+            });
+            openings.push(shut);
         }
     }
     // A region of one wall: the rest of that wall is kept out of the plan
@@ -2379,7 +2450,9 @@ fn plan_room(
 /// on it already (forward or backing), else onto the lane and along it to
 /// the station — onto the lane's own line by a manoeuvre when the lane is
 /// nearer its wall than a turn on the spot allows, else where the robot
-/// can turn (`clearance` from every wall).
+/// can turn (`clearance` from every wall). The second of the pair is
+/// false when no way keeps the body and the field clear as the map holds
+/// them: the way is then driven all the same, the supervisor watching.
 fn station_way(
     config: &ExecutiveConfig,
     floor: &Floor,
@@ -2387,9 +2460,9 @@ fn station_way(
     k: usize,
     from: &Pose2,
     speed: f64,
-) -> Vec<Behaviour> {
+) -> (Vec<Behaviour>, bool) {
     let (Some(station), Some((line, dist))) = (run.plan.stations.get(k), run.lane_line(k)) else {
-        return Vec::new();
+        return (Vec::new(), true);
     };
     let gains = &config.gains;
     let goal = station.base;
@@ -2399,14 +2472,17 @@ fn station_way(
     let on_lane = off.abs() < 0.15 && wrap_angle(from.theta - goal.theta).abs() < 0.2;
     if on_lane && floor.sweep_clear(&p, &goal.position().coords, &heading) {
         let ahead = heading.dot(&(goal.position().coords - p));
-        return vec![if ahead >= 0.0 {
-            Behaviour::regulate(gains, goal, speed)
-        } else {
-            Behaviour::reverse_to(gains, goal, speed)
-        }];
+        return (
+            vec![if ahead >= 0.0 {
+                Behaviour::regulate(gains, goal, speed)
+            } else {
+                Behaviour::reverse_to(gains, goal, speed)
+            }],
+            true,
+        );
     }
     let Some((entry, forward)) = lane_entry(floor, run, k) else {
-        return Vec::new();
+        return (Vec::new(), true);
     };
     // A lane nearer its wall than a turn on the spot allows is entered
     // on its own line, in the moves that get there: from the turning
@@ -2432,20 +2508,50 @@ fn station_way(
     // clear; where the turning places are too few (a small room with a
     // counter along one wall), the manoeuvre onto the station itself.
     if space.way_cost(from, &way).is_some() {
-        return way;
+        return (way, true);
     }
     match space.manoeuvre(from, &goal) {
-        Some((_, moves)) => manoeuvre::behaviours(gains, &moves, speed),
-        None => way,
+        Some((_, moves)) => (manoeuvre::behaviours(gains, &moves, speed), true),
+        None => (way, false),
     }
 }
 
-/// The space the way between stations is checked in: the plan's room
-/// and what stands on its floor (no doorway: the robot stays in).
+/// The way from `from` to the plan's next station; notes in `run`
+/// whether it was found clear.
+fn next_station_way(
+    config: &ExecutiveConfig,
+    floor_clearance: f64,
+    run: &mut PlasterRun,
+    from: &Pose2,
+    speed: f64,
+) -> Vec<Behaviour> {
+    let floor = floor_of(run, &config.vehicle, floor_clearance);
+    let (way, clear) = station_way(config, &floor, run, run.cursor.station, from, speed);
+    run.way_unchecked = !clear;
+    way
+}
+
+/// The space the way between stations is checked in: the plan's room,
+/// what stands on its floor and its doorways (a room too narrow to turn
+/// in, a hall, is turned in with the front in a doorway).
 fn plaster_space<'a>(config: &'a ExecutiveConfig, run: &'a PlasterRun, speed: f64) -> Space<'a> {
+    let doors: Vec<DoorEstimate> = run
+        .plan
+        .room
+        .openings
+        .iter()
+        .filter(|o| o.kind == OpeningKind::Door)
+        .map(|o| DoorEstimate {
+            wall: o.wall,
+            position_m: 0.5 * (o.along_m[0] + o.along_m[1]),
+            width_m: Some(o.along_m[1] - o.along_m[0]),
+            sigma_m: 0.0,
+            plan_door: None,
+        })
+        .collect();
     Space::new(
         run.plan.room.size_m,
-        &[],
+        &doors,
         &run.plan.room.obstacles,
         &config.vehicle,
         &config.safety,

@@ -35,6 +35,14 @@ pub struct PlanDoor {
     pub at_m: [f64; 2],
     /// Its width, m.
     pub width_m: f64,
+    /// Its height, m, when the drawing gives it (the plaster stops at
+    /// the top of a door the camera has not measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<f64>,
+    /// Kept shut: no way through, and no gap the laser sees; the rooms'
+    /// plaster leaves its leaf out.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub shut: bool,
 }
 
 /// Where a door lies in one of its rooms.
@@ -126,6 +134,9 @@ impl FloorPlan {
             if !(d.width_m.is_finite() && d.width_m > 0.0) {
                 return Err(fault("door", i, "width_m", "must be positive".into()));
             }
+            if d.height_m.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
+                return Err(fault("door", i, "height_m", "must be positive".into()));
+            }
             if d.rooms[0] == d.rooms[1] {
                 return Err(fault("door", i, "rooms", "two different rooms".into()));
             }
@@ -186,8 +197,19 @@ impl FloorPlan {
         self.rooms.iter().position(|r| r.name == name)
     }
 
-    /// The doors of `room`: each door's index and where it lies there.
+    /// The open doors of `room` (the ways out of it): each door's index
+    /// and where it lies there.
     pub fn doors_of(&self, room: usize) -> impl Iterator<Item = (usize, DoorSide)> + '_ {
+        self.sides_in(room).filter(|(i, _)| !self.doors[*i].shut)
+    }
+
+    /// The shut doors of `room`: each door's index and where it lies
+    /// there.
+    pub fn shut_doors_of(&self, room: usize) -> impl Iterator<Item = (usize, DoorSide)> + '_ {
+        self.sides_in(room).filter(|(i, _)| self.doors[*i].shut)
+    }
+
+    fn sides_in(&self, room: usize) -> impl Iterator<Item = (usize, DoorSide)> + '_ {
         self.sides
             .iter()
             .enumerate()
@@ -320,6 +342,8 @@ mod tests {
             rooms: [a.into(), b.into()],
             at_m,
             width_m: 1.0,
+            height_m: None,
+            shut: false,
         };
         FloorPlan::new(
             vec![
@@ -373,6 +397,30 @@ mod tests {
         });
         let q = FloorPlan::new(rooms, p.doors().to_vec()).unwrap();
         assert_eq!(q.route(0, 3), None);
+    }
+
+    #[test]
+    fn a_shut_door_is_no_way_but_is_kept_with_its_height() {
+        let p = plan();
+        let mut doors = p.doors().to_vec();
+        doors[2].shut = true;
+        doors[2].height_m = Some(2.05);
+        let q = FloorPlan::new(p.rooms().to_vec(), doors.clone()).unwrap();
+        // From a to b through the corridor, not the shut door.
+        assert_eq!(q.route(1, 2), Some(vec![0, 1]));
+        assert_eq!(q.doors_of(1).map(|(d, _)| d).collect::<Vec<_>>(), [0]);
+        let shut: Vec<_> = q.shut_doors_of(2).collect();
+        assert_eq!(shut.len(), 1);
+        assert_eq!((shut[0].0, shut[0].1.wall), (2, WallName::West));
+        assert_eq!(q.doors()[2].height_m, Some(2.05));
+        // Read from a drawing and written back the same.
+        let text = toml::to_string(&PlanText::from(q.clone())).unwrap();
+        assert!(text.contains("shut = true"), "{text}");
+        let back: FloorPlan = toml::from_str(&text).unwrap();
+        assert_eq!(back, q);
+        doors[2].height_m = Some(0.0);
+        let e = FloorPlan::new(p.rooms().to_vec(), doors).unwrap_err();
+        assert_eq!((e.table, e.index, e.field), ("door", 2, "height_m"));
     }
 
     #[test]

@@ -132,6 +132,9 @@ pub(crate) struct PlasterRun {
     pub resume_s: f64,
     /// Spraying time since the last checkpoint, s.
     pub unsaved_s: f64,
+    /// The way to the current station was not found clear as the map
+    /// holds it (it is driven all the same, the supervisor watching).
+    pub way_unchecked: bool,
 }
 
 impl PlasterRun {
@@ -145,7 +148,20 @@ impl PlasterRun {
             retries: 0,
             resume_s: 0.0,
             unsaved_s: 0.0,
+            way_unchecked: false,
         }
+    }
+
+    /// Gives up the current station, which the robot cannot get to: the
+    /// plan goes on with the next one and reports what only it reached
+    /// as unreachable. The area lost, m².
+    pub fn give_up_station(&mut self) -> Option<f64> {
+        let lost = self.plan.give_up_station(self.cursor.station)?;
+        self.cursor.pass = 0;
+        self.cursor.step = 0;
+        self.digest = plan_digest(&self.plan);
+        self.way_unchecked = false;
+        Some(lost)
     }
 
     /// Puts `plan` in place of the one carried out, from its start.

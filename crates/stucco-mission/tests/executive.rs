@@ -1325,6 +1325,8 @@ fn offices() -> FloorPlan {
         rooms: [a.to_owned(), b.to_owned()],
         at_m,
         width_m: 1.0,
+        height_m: None,
+        shut: false,
     };
     FloorPlan::new(
         vec![
@@ -1606,8 +1608,8 @@ fn a_hold_is_told_and_cleared_while_the_mission_stands() {
 }
 
 /// The apartment's drawing (missions/plans/apartment.toml): a hall 1.2 m
-/// wide with the living room and the kitchen to its south, the bedroom to
-/// its north.
+/// wide with the living room and the kitchen to its south, the bedroom
+/// and the bathroom (its door shut) to its north.
 fn apartment() -> FloorPlan {
     let room = |name: &str, origin_m, size_m| PlanRoom {
         name: name.to_owned(),
@@ -1618,6 +1620,8 @@ fn apartment() -> FloorPlan {
         rooms: [a.to_owned(), b.to_owned()],
         at_m,
         width_m,
+        height_m: None,
+        shut: false,
     };
     FloorPlan::new(
         vec![
@@ -1625,11 +1629,17 @@ fn apartment() -> FloorPlan {
             room("kitchen", [5.15, 0.0], [2.85, 2.85]),
             room("hall", [0.0, 3.0], [8.0, 1.2]),
             room("bedroom", [0.0, 4.35], [4.0, 3.65]),
+            room("bath", [4.15, 4.35], [3.85, 3.65]),
         ],
         vec![
             door("living", "hall", [3.55, 2.925], 0.9),
             door("kitchen", "hall", [6.6, 2.925], 0.8),
             door("hall", "bedroom", [3.4, 4.275], 0.8),
+            PlanDoor {
+                shut: true,
+                height_m: Some(2.0),
+                ..door("hall", "bath", [4.9, 4.275], 0.7)
+            },
         ],
     )
     .unwrap()
@@ -1719,6 +1729,121 @@ fn the_robot_turns_in_a_hall_too_narrow_to_turn_on_the_spot_in() {
     // keeps the field's 2 cm sides and 2 cm more; the rest is the line
     // law's tracking).
     println!("closest to a wall: {closest:.3} m");
+    assert!(closest >= 0.01, "{closest}");
+}
+
+#[test]
+fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_walls() {
+    // The apartment's hall, 8 × 1.2 m: the long walls' stations are turned
+    // onto with the front in a doorway; the end walls' stand across the
+    // hall, which no way turns the robot to. The laser sees the walls, so
+    // the supervisor stops a way into one; the station is then given up.
+    let plan = apartment();
+    let mut robot = Robot::at(Pose2::new(3.4, 0.6, 0.0));
+    robot.in_room(&plan, 2);
+    let mut cfg = config(true);
+    cfg.spray = Some(stucco_plan::SprayTool::default());
+    cfg.floor = Some(plan.clone());
+    cfg.safety.obstacle_margin_m = 0.03;
+    cfg.safety.lateral_margin_m = 0.02;
+    let mut exec = Executive::new(cfg, vec![plaster(false)]);
+    // The hall's walls as the laser sees them (hall frame), every 2 cm,
+    // with the rooms beyond the open doors 1.6 m back.
+    let line = |a: [f64; 2], b: [f64; 2]| {
+        let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.02).ceil() as usize;
+        (0..=n).map(move |k| {
+            let t = k as f64 / n as f64;
+            Point2::new(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))
+        })
+    };
+    let walls: Vec<Point2<f64>> = line([0.0, 0.0], [3.1, 0.0])
+        .chain(line([4.0, 0.0], [6.2, 0.0]))
+        .chain(line([7.0, 0.0], [8.0, 0.0]))
+        .chain(line([0.0, 1.2], [3.0, 1.2]))
+        .chain(line([3.8, 1.2], [8.0, 1.2]))
+        .chain(line([0.0, 0.0], [0.0, 1.2]))
+        .chain(line([8.0, 0.0], [8.0, 1.2]))
+        .chain(line([3.1, -1.6], [4.0, -1.6]))
+        .chain(line([6.2, -1.6], [7.0, -1.6]))
+        .chain(line([3.0, 2.8], [3.8, 2.8]))
+        .collect();
+    let (mut first_plan, mut last_plan, mut given_up, mut passes) = (None, None, Vec::new(), 0);
+    let mut closest = f64::INFINITY;
+    for _ in 0..(4000.0 / DT) as usize {
+        let to_robot = robot.pose.inverse();
+        let seen: Vec<Point2<f64>> = walls
+            .iter()
+            .map(|p| to_robot.transform_point(p))
+            .filter(|p| p.coords.norm() < 3.0)
+            .collect();
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        if first_plan.is_none() {
+            first_plan = exec.plaster_plan().cloned();
+        }
+        if !out.events.is_empty()
+            && let Some(p) = exec.plaster_plan()
+        {
+            last_plan = Some(p.clone());
+        }
+        for e in &out.events {
+            match e.kind {
+                EventKind::StationGivenUp { unreachable_m2, .. } => given_up.push(unreachable_m2),
+                EventKind::PassDone { .. } => passes += 1,
+                _ => {}
+            }
+        }
+        robot.drive(out.drive);
+        closest = closest.min(body_inside(&robot, &plan));
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    let (first, last) = (first_plan.unwrap(), last_plan.unwrap());
+    let lanes = |p: &stucco_plan::Plan, w: WallName| {
+        p.stations
+            .iter()
+            .filter(|s| s.lane == stucco_plan::Lane::Wall(w))
+            .count()
+    };
+    // Planned on every wall; every station along the long walls carried
+    // out, every one facing an end wall given up.
+    for w in WallName::ALL {
+        assert!(lanes(&first, w) > 0, "{w:?}");
+    }
+    for w in [WallName::East, WallName::West] {
+        assert_eq!(lanes(&last, w), 0, "{w:?}");
+    }
+    assert_eq!(
+        last.stations.len() + given_up.len(),
+        first.stations.len(),
+        "{given_up:?}"
+    );
+    assert_eq!(
+        passes,
+        last.stations.iter().map(|s| s.passes.len()).sum::<usize>()
+    );
+    // What they alone reached is reported: the end walls less their
+    // edges, 2.4 m² each.
+    let lost = |p: &stucco_plan::Plan, w: WallName| {
+        p.unreachable
+            .iter()
+            .filter(|u| u.surface == SurfaceId::Wall(w))
+            .map(|u| u.area_m2)
+            .sum::<f64>()
+    };
+    for w in [WallName::East, WallName::West] {
+        assert!(
+            (2.3..2.5).contains(&lost(&last, w)),
+            "{w:?}: {}",
+            lost(&last, w)
+        );
+    }
+    let reported: f64 = given_up.iter().sum();
+    let grown = last.unreachable.iter().map(|u| u.area_m2).sum::<f64>()
+        - first.unreachable.iter().map(|u| u.area_m2).sum::<f64>();
+    assert!((reported - grown).abs() < 1e-6, "{reported} {grown}");
+    println!("closest to a wall: {closest:.3} m; given up: {given_up:?}");
     assert!(closest >= 0.01, "{closest}");
 }
 

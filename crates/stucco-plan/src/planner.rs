@@ -416,6 +416,21 @@ impl Plan {
         }
     }
 
+    /// Gives up station `k`, which the robot found no way to (a hall too
+    /// narrow to turn across): it leaves the plan, and what only it
+    /// reached is reported unreachable. The plasterable area that was
+    /// lost with it, m²; `None` when there is no station `k`.
+    pub fn give_up_station(&mut self, k: usize) -> Option<f64> {
+        if k >= self.stations.len() {
+            return None;
+        }
+        let lost = |p: &Plan| p.unreachable.iter().map(|u| u.area_m2).sum::<f64>();
+        let before = lost(self);
+        self.stations.remove(k);
+        (self.reach, self.unreachable) = reach_of(&self.surfaces, &self.stations, &self.tool);
+        Some(lost(self) - before)
+    }
+
     /// Every pass with the index of its station.
     pub fn passes(&self) -> impl Iterator<Item = (usize, &Pass)> {
         self.stations
@@ -525,9 +540,29 @@ pub fn plan(
     let mut stations = ordered;
     planner.ceiling_passes(&mut stations, &strokes);
 
+    let (reach, unreachable) = reach_of(&surfaces, &stations, tool);
+    let mut plan = Plan {
+        tool: tool.clone(),
+        room: room.clone(),
+        surfaces,
+        stations,
+        reach,
+        unreachable,
+    };
+    plan.end_wall_passes_near_the_next();
+    Ok(plan)
+}
+
+/// What `stations` reach of each of `surfaces`, and the plasterable parts
+/// they leave.
+fn reach_of(
+    surfaces: &[Surface],
+    stations: &[Station],
+    tool: &SprayTool,
+) -> (Vec<ReachMask>, Vec<Unreachable>) {
     let mut reach = Vec::new();
     let mut unreachable = Vec::new();
-    for surface in &surfaces {
+    for surface in surfaces {
         let bands: Vec<Rect> = stations
             .iter()
             .flat_map(|s| s.passes.iter())
@@ -541,16 +576,7 @@ pub fn plan(
         }
         reach.push(mask);
     }
-    let mut plan = Plan {
-        tool: tool.clone(),
-        room: room.clone(),
-        surfaces,
-        stations,
-        reach,
-        unreachable,
-    };
-    plan.end_wall_passes_near_the_next();
-    Ok(plan)
+    (reach, unreachable)
 }
 
 /// The robot's footprint, in its own frame.
@@ -1374,6 +1400,32 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_station_given_up_leaves_what_only_it_reached_unreachable() {
+        // A hall: each end wall is coated from stations of its own.
+        let mut p = make(&room([8.0, 1.2], 2.6, Vec::new()));
+        assert!(p.unreachable.is_empty(), "{:?}", p.unreachable);
+        let stations = p.stations.len();
+        let west: Vec<usize> = (0..stations)
+            .filter(|&k| p.stations[k].lane == Lane::Wall(WallName::West))
+            .collect();
+        assert!(!west.is_empty());
+        let mut lost = 0.0;
+        for (n, k) in west.iter().enumerate() {
+            lost += p.give_up_station(k - n).expect("a station");
+        }
+        assert_eq!(p.stations.len(), stations - west.len());
+        // The west wall less its edges (1.2 - 2 × 0.11 by 2.6 - 0.1 - 0.11),
+        // and nothing of the other surfaces, which other stations reach.
+        let [u] = p.unreachable.as_slice() else {
+            panic!("{:?}", p.unreachable);
+        };
+        assert_eq!(u.surface, SurfaceId::Wall(WallName::West));
+        assert!((u.area_m2 - 0.98 * 2.39).abs() < 0.05, "{u:?}");
+        assert!((lost - u.area_m2).abs() < 1e-9, "{lost}");
+        assert_eq!(p.give_up_station(p.stations.len()), None);
     }
 
     #[test]

@@ -128,6 +128,9 @@ impl Rect {
 pub enum OpeningKind {
     /// A door: from the floor up.
     Door,
+    /// A door the building's drawing gives that is kept shut: not
+    /// plastered, and no way through.
+    ShutDoor,
     /// A window: from its sill to its head.
     Window,
 }
