@@ -255,7 +255,7 @@ fn the_apartment_is_plastered_room_by_room_in_one_job() {
         .iter()
         .map(|r| (r.room.as_str(), r.why.as_str()))
         .collect();
-    assert_eq!(left, [("bath", "every door of it is shut")]);
+    assert_eq!(left, [("bath", "no open door leads there")]);
     assert!((plaster.rooms_left[0].floor_m2 - 3.85 * 3.65).abs() < 1e-9);
     let hall = &plaster.rooms[3];
     for s in &hall.surfaces {
@@ -286,6 +286,31 @@ fn the_apartment_is_plastered_room_by_room_in_one_job() {
         100.0 * r.thickness_cv.unwrap(),
         100.0 * edge,
         t / bound
+    );
+}
+
+/// The demo killed in the kitchen and resumed: the resumed run reports
+/// the whole job, its plastering time (the part before the kill counts)
+/// and the windows of the rooms left before the kill with the rest.
+#[test]
+fn the_apartment_killed_in_the_kitchen_and_resumed_reports_the_whole_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = run_file("demo", dir.path(), false, Some(3000.0));
+    assert_eq!(first.outcome, "stopped");
+    assert_eq!(first.room.as_deref(), Some("kitchen"));
+    let r = run_file("demo", dir.path(), true, None);
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    assert_coat_targets(&r);
+    assert_eq!((r.windows_found, r.windows_total), (3, 3));
+    let rooms: Vec<&str> = r.windows.iter().map(|w| w.room.as_str()).collect();
+    assert!(rooms.contains(&"living"), "{rooms:?}");
+    let (t, bound) = (
+        r.mission_time_s.unwrap(),
+        r.mission_time_lower_bound_s.unwrap(),
+    );
+    assert!(
+        (bound..=1.25 * bound).contains(&t),
+        "{t} s against a bound of {bound} s"
     );
 }
 

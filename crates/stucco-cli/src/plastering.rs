@@ -149,7 +149,7 @@ pub struct RoomLeft {
     pub room: String,
     /// Its floor (and ceiling) as drawn, m².
     pub floor_m2: f64,
-    /// Why: every door of it is shut, or no task plastered it.
+    /// Why: no open door leads there, or no task plastered it.
     pub why: String,
 }
 

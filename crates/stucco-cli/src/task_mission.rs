@@ -105,6 +105,22 @@ pub struct PassReport {
     pub samples: usize,
 }
 
+/// The windows found in every room the robot has been in, the room it is
+/// in first: the navigator's, and those of rooms a run resumed from
+/// `resume` had left before it (unless the robot has been in them since).
+fn windows_by_room<'a>(
+    nav: &'a Navigator,
+    resume: Option<&'a Checkpoint>,
+) -> Vec<crate::navigator::RoomWindows<'a>> {
+    let mut all = nav.windows_by_room();
+    for (room, w) in resume.iter().flat_map(|cp| &cp.rooms_left) {
+        if !all.iter().any(|(r, _)| *r == Some(room.as_str())) {
+            all.push((Some(room.as_str()), w.clone()));
+        }
+    }
+    all
+}
+
 /// The rooms of `mission`'s floor plan none of `plastered` is, each with
 /// its drawn floor and why.
 fn rooms_left(
@@ -122,7 +138,7 @@ fn rooms_left(
             room: r.name.clone(),
             floor_m2: r.size_m[0] * r.size_m[1],
             why: if plan.doors_of(i).next().is_none() {
-                "every door of it is shut".to_owned()
+                "no open door leads there".to_owned()
             } else {
                 "no plaster task".to_owned()
             },
@@ -298,6 +314,10 @@ pub struct Checkpoint {
     /// whole job's plastering time.
     #[serde(default)]
     pub task_seconds: std::collections::BTreeMap<usize, f64>,
+    /// The windows found in each room the robot had left, by the plan's
+    /// name of the room: a resumed run reports them with its own.
+    #[serde(default)]
+    pub rooms_left: Vec<(String, Vec<(WallName, stucco_nav::Window)>)>,
 }
 
 /// The room as the robot knew it at a checkpoint.
@@ -670,6 +690,11 @@ fn run_once(
                 *plan_written.borrow_mut() = p.plan_digest.clone();
             }
             let est = nav.mission_estimate();
+            let rooms_left = windows_by_room(nav, resume)
+                .into_iter()
+                .skip(1)
+                .filter_map(|(room, w)| Some((room?.to_owned(), w)))
+                .collect();
             let cp = Checkpoint {
                 mission: mission.name.clone(),
                 digest: digest(fingerprint),
@@ -685,6 +710,7 @@ fn run_once(
                 },
                 sim_pose: nav.truth(),
                 task_seconds,
+                rooms_left,
             };
             write_atomic(
                 &dir.join("checkpoint.json"),
@@ -942,7 +968,7 @@ fn run_once(
     // Every room the robot has been in, each in its true frame.
     let mut windows = Vec::new();
     let (mut windows_found, mut windows_total) = (0, 0);
-    for (room, found) in nav.windows_by_room() {
+    for (room, found) in windows_by_room(&nav, resume) {
         let room_frame = match room {
             Some(name) => RoomFrame::named(&layout, name)?,
             None => frame.clone(),
@@ -980,7 +1006,7 @@ fn run_once(
                     room: frame.name.clone(),
                     task,
                     stations: plan.stations.len(),
-                    unreachable_m2: plan.unreachable.iter().map(|u| u.area_m2).sum(),
+                    unreachable_m2: plan.unreachable_m2(),
                     surfaces,
                     predicted: crate::plastering::PredictedScores {
                         wall_coverage_pct: predicted.wall_coverage_pct,

@@ -1278,11 +1278,16 @@ impl Executive {
                         let from = inputs.estimate.pose;
                         a.queue =
                             next_station_way(&self.config, clearance, run, &from, speed_mps).into();
+                        // None left: the task ends where the robot
+                        // stands, and the next task's way starts there.
                         if run.finished() {
                             run.phase = Phase::Leaving;
                         }
                         a.current = None;
                         a.blocked_s = 0.0;
+                        // The plan on disk and the checkpoint's cursor
+                        // must name the same stations.
+                        *checkpoint_due = true;
                     }
                     if a.blocked_s > safety.blocked_timeout_s {
                         self.fail(now, "the way stayed blocked".to_owned());
@@ -1393,7 +1398,7 @@ impl Executive {
                 EventKind::PlanMade {
                     task: index,
                     stations: run.plan.stations.len(),
-                    unreachable_m2: run.plan.unreachable.iter().map(|u| u.area_m2).sum(),
+                    unreachable_m2: run.plan.unreachable_m2(),
                 },
             );
             if survey && !resumed {
@@ -1839,7 +1844,7 @@ impl Executive {
                     kind: EventKind::PlanMade {
                         task: index,
                         stations: plan.stations.len(),
-                        unreachable_m2: plan.unreachable.iter().map(|u| u.area_m2).sum(),
+                        unreachable_m2: plan.unreachable_m2(),
                     },
                 });
                 run.replan(plan);
@@ -2321,9 +2326,9 @@ impl Executive {
 
 /// A plastering plan for `walls` (and the ceiling) on the room as `est`
 /// knows it. Openings the camera found come with their own top (one
-/// reaching the floor is a door); a door only the laser found, or one the
-/// floor plan gives shut, has the top the plan gives it, else the tool's
-/// `door_head_m`.
+/// reaching the floor is a door); a door only the laser found has the top
+/// the floor plan gives it, else the tool's `door_head_m`, and so has a
+/// door the plan gives shut, or the camera's top where it saw higher.
 fn plan_room(
     config: &ExecutiveConfig,
     (walls, ceiling, region): (&[WallName], bool, Option<&crate::task::Region>),
@@ -2451,8 +2456,10 @@ fn plan_room(
 /// the station — onto the lane's own line by a manoeuvre when the lane is
 /// nearer its wall than a turn on the spot allows, else where the robot
 /// can turn (`clearance` from every wall). The second of the pair is
-/// false when no way keeps the body and the field clear as the map holds
-/// them: the way is then driven all the same, the supervisor watching.
+/// false when the way found does not keep the body and the field clear
+/// as the map holds them: it is then driven all the same, the supervisor
+/// watching (a way not tried at all, none being needed or found, is
+/// empty and true).
 fn station_way(
     config: &ExecutiveConfig,
     floor: &Floor,

@@ -159,6 +159,8 @@ impl PlasterRun {
         let lost = self.plan.give_up_station(self.cursor.station)?;
         self.cursor.pass = 0;
         self.cursor.step = 0;
+        self.resume_s = 0.0;
+        self.retries = 0;
         self.digest = plan_digest(&self.plan);
         self.way_unchecked = false;
         Some(lost)

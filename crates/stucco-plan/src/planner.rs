@@ -418,17 +418,36 @@ impl Plan {
 
     /// Gives up station `k`, which the robot found no way to (a hall too
     /// narrow to turn across): it leaves the plan, and what only it
-    /// reached is reported unreachable. The plasterable area that was
+    /// reached of the surfaces it sprays is reported unreachable (the
+    /// rest of the plan's reach stays as it was). The plasterable area
     /// lost with it, m²; `None` when there is no station `k`.
     pub fn give_up_station(&mut self, k: usize) -> Option<f64> {
         if k >= self.stations.len() {
             return None;
         }
-        let lost = |p: &Plan| p.unreachable.iter().map(|u| u.area_m2).sum::<f64>();
-        let before = lost(self);
-        self.stations.remove(k);
-        (self.reach, self.unreachable) = reach_of(&self.surfaces, &self.stations, &self.tool);
-        Some(lost(self) - before)
+        let station = self.stations.remove(k);
+        let mut lost = 0.0;
+        for (i, surface) in self.surfaces.iter().enumerate() {
+            if !station.passes.iter().any(|p| p.surface == surface.id) {
+                continue;
+            }
+            let (mut reach, unreachable) =
+                reach_of(std::slice::from_ref(surface), &self.stations, &self.tool);
+            let before = self.unreachable.iter().filter(|u| u.surface == surface.id);
+            lost -= before.map(|u| u.area_m2).sum::<f64>();
+            lost += unreachable.iter().map(|u| u.area_m2).sum::<f64>();
+            self.unreachable.retain(|u| u.surface != surface.id);
+            self.unreachable.extend(unreachable);
+            if let (Some(r), Some(new)) = (self.reach.get_mut(i), reach.pop()) {
+                *r = new;
+            }
+        }
+        Some(lost)
+    }
+
+    /// Plasterable area no station reaches, m².
+    pub fn unreachable_m2(&self) -> f64 {
+        self.unreachable.iter().map(|u| u.area_m2).sum()
     }
 
     /// Every pass with the index of its station.
