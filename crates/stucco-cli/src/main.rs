@@ -176,6 +176,10 @@ enum Command {
         /// reference path, m.
         #[arg(long, default_value_t = stucco_cli::RPE_PAIR_DISTANCE_M)]
         rpe_distance: f64,
+        /// Move the filter by the odometry alone, not corrected by scan
+        /// matching (only the walls correct it).
+        #[arg(long)]
+        no_scan_matching: bool,
         /// Print the report as one JSON object on stdout.
         #[arg(long)]
         json: bool,
@@ -946,6 +950,7 @@ fn main() -> ExitCode {
             odom_noise,
             out,
             rpe_distance,
+            no_scan_matching,
             json,
         } => {
             let reference = match (reference, reference_from_log) {
@@ -960,6 +965,7 @@ fn main() -> ExitCode {
                 odom_noise,
                 out,
                 rpe_distance_m: rpe_distance,
+                scan_matching: !no_scan_matching,
             };
             let bar = ProgressBar::new(0).with_style(
                 ProgressStyle::with_template("{bar:30} {pos}/{len} scans {per_sec} {msg}")
@@ -1000,6 +1006,12 @@ fn main() -> ExitCode {
                             );
                         }
                     };
+                    if report.scan_matching {
+                        println!(
+                            "  scan matching: {:.1} % of the scans registered on the last ones",
+                            100.0 * report.scans_matched_share
+                        );
+                    }
                     show("filter", &report.rpe);
                     show("odometry", &report.odom_rpe);
                     if let Some(dir) = &job.out {

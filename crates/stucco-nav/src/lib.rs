@@ -22,6 +22,9 @@
 //!   and every wall in one EKF, each scan's walls matched by a
 //!   decision-directed Bayesian classifier; the [`WallMap`] saved and
 //!   loaded for localisation in a known map.
+//! - [`LaserOdometry`]: the wheels' displacement between scans corrected
+//!   by registering each scan's echoes on a recent scan's
+//!   ([`ScanReference`]: point-to-line ICP with the wheels as prior).
 //! - [`DefeaturedLaser`]: a laser preset made worse on purpose (range,
 //!   resolution, field of view, noise), as the sensor-precision paper does.
 //! - [`RoomGraph`]: the room-and-door map — rooms as nodes, doors as
@@ -66,6 +69,7 @@ mod room_ekf;
 mod room_graph;
 mod rpe;
 mod rwht;
+mod scan_match;
 mod segments;
 pub mod synthetic;
 mod wall;
@@ -96,6 +100,9 @@ pub use room_graph::{
 };
 pub use rpe::{Pairs, Rpe, relative_pose_error};
 pub use rwht::{RwhtConfig, RwhtExtractor};
+pub use scan_match::{
+    LaserOdometry, LaserOdometryConfig, LaserStep, ScanMatch, ScanMatchConfig, ScanReference,
+};
 pub use segments::{Segment, SegmentTransform, Segmenter};
 pub use wall::Wall;
 pub use wall_map::{MapWall, WallId, WallMap, WallRole};
