@@ -1,6 +1,7 @@
-//! Scan matching as odometry: each scan's echoes registered on a recent
-//! scan's by point-to-line ICP (Censi 2008), with the wheels' displacement
-//! as the prior.
+//! Scan matching as odometry: each scan's echoes registered on recent
+//! scans' by point-to-line ICP (Gauss-Newton on the distance of each echo
+//! to the line through its pair's neighbours), with the wheels'
+//! displacement as the prior.
 //!
 //! The walls of the map-building filter ([`crate::WallMapEkf`]) correct
 //! the pose only where a scan sees long straight walls it already knows.
@@ -19,13 +20,17 @@
 //!   a direction the echoes leave open (along a bare corridor) takes the
 //!   wheels' word and the result's covariance says so.
 //! - [`LaserOdometry`] keeps one keyframe until the robot has moved away
-//!   from it or sees too little of it, so the error does not add up scan by
-//!   scan, and hands the filter a [`Displacement`] with its covariance. A
-//!   keyframe is made of the last few scans that were keyframes, each where
-//!   the matching put it: a scan taken a metre on still overlaps it. In
-//!   the thinned logs of the Radish collection (a scan every 0.7 m and 20°
-//!   in the Intel lab) keyframes of one scan left the raw Intel log at
-//!   0.39 m of error over 10 m, six scans at 0.18 m.
+//!   from it or sees too little of it (a scan stream at 10 Hz matches
+//!   several scans on one keyframe, so their errors do not add up), and
+//!   hands the filter a [`Displacement`] with its covariance. A keyframe is
+//!   made of the last few scans that were keyframes, each where the
+//!   matching put it (after a failed match, of the new scan alone): a scan
+//!   taken a metre on still overlaps it. In the thinned logs of the Radish
+//!   collection (a scan every 0.7 m and 20° in the Intel lab, a keyframe
+//!   each), the map filter fed by keyframes of one scan drifted 0.39 m over
+//!   10 m on the raw Intel log, by keyframes of six 0.18 m.
+
+use std::collections::VecDeque;
 
 use nalgebra::{Matrix2, Matrix3, Point2, SymmetricEigen, Vector2, Vector3};
 use rstar::RTree;
@@ -66,7 +71,7 @@ pub struct ScanMatchConfig {
     pub iterations: usize,
     /// Step of the headings tried before the iterations, rad: the heading
     /// the echoes fit best, within three standard deviations of the
-    /// prior's, is where they start.
+    /// prior's (at most 60 steps either way), is where they start.
     pub heading_search_step_rad: f64,
     /// Fewest pairs a match needs.
     pub min_pairs: usize,
@@ -209,9 +214,9 @@ impl ScanReference {
                 let q = pose.transform_point(p);
                 let nn = self.tree.nearest_neighbor([q.x, q.y])?;
                 let line = &self.lines[nn.data];
-                let off = q - line.p;
-                (off.norm_squared() <= gate * gate)
-                    .then(|| 1.0 - (line.normal.dot(&off) / gate).powi(2))
+                let d = q - line.p;
+                (d.norm_squared() <= gate * gate)
+                    .then(|| 1.0 - (line.normal.dot(&d) / gate).powi(2))
             })
             .sum()
     }
@@ -246,7 +251,8 @@ impl ScanReference {
 
     /// Registers `points` on the reference: the pose of their frame in the
     /// reference's, starting from `prior` and held to it by
-    /// `prior_covariance`. `None` if fewer than `min_pairs` echoes pair.
+    /// `prior_covariance`. `None` if fewer than `min_pairs` echoes (and
+    /// never fewer than three) pair, or if the prior is not finite.
     pub fn register(
         &self,
         points: &[Point2<f64>],
@@ -254,9 +260,17 @@ impl ScanReference {
         prior_covariance: &Matrix3<f64>,
         config: &ScanMatchConfig,
     ) -> Option<ScanMatch> {
+        if !(prior_covariance.iter().all(|v| v.is_finite())
+            && [prior.x, prior.y, prior.theta]
+                .iter()
+                .all(|v| v.is_finite()))
+        {
+            return None;
+        }
         let prior_information = (prior_covariance + Matrix3::identity() * 1e-12)
             .try_inverse()
             .unwrap_or_else(Matrix3::zeros);
+        let min_pairs = config.min_pairs.max(3);
         let [far, near] = config.pair_distance_m;
         let mut pose = self.best_heading(points, prior, prior_covariance, far, config);
         let settle = (config.iterations / 2).max(1);
@@ -291,28 +305,29 @@ impl ScanReference {
                 pairs += 1;
                 sum2 += e * e;
             }
-            if pairs < config.min_pairs {
+            if pairs < min_pairs {
                 return None;
             }
             // The echoes of one surface err together: count at most
             // `max_effective_pairs` of them.
+            let rms2 = sum2 / pairs as f64;
             let scale = (config.max_effective_pairs / pairs as f64).min(1.0);
             let (h, g) = (h * scale, g * scale);
-            let off = Vector3::new(
+            let from_prior = Vector3::new(
                 pose.x - prior.x,
                 pose.y - prior.y,
                 wrap_angle(pose.theta - prior.theta),
             );
             let lhs = h + prior_information;
             let inv = lhs.try_inverse()?;
-            let step = -inv * (g + prior_information * off);
+            let step = -inv * (g + prior_information * from_prior);
             pose = Pose2::new(pose.x + step.x, pose.y + step.y, pose.theta + step.z);
             result = Some(ScanMatch {
                 pose,
                 covariance: 0.5 * (inv + inv.transpose()),
                 pairs,
                 paired_share: pairs as f64 / points.len().max(1) as f64,
-                rms_m: (sum2 / pairs as f64).sqrt(),
+                rms_m: rms2.sqrt(),
             });
             if f >= 1.0 && step.xy().norm() < 1e-5 && step.z.abs() < 1e-6 {
                 break;
@@ -383,7 +398,7 @@ pub struct LaserOdometry {
     body: Vec<Point2<f64>>,
     /// The line points of the scans the last keyframes were made of, each
     /// in its own frame, newest last, with the poses they were taken at.
-    recent: std::collections::VecDeque<(Pose2, Vec<LinePoint>)>,
+    recent: VecDeque<(Pose2, Vec<LinePoint>)>,
 }
 
 /// What one scan gave [`LaserOdometry`].
@@ -412,13 +427,8 @@ impl LaserOdometry {
             keyframe: None,
             pose: Pose2::IDENTITY,
             body: Vec::new(),
-            recent: std::collections::VecDeque::new(),
+            recent: VecDeque::new(),
         }
-    }
-
-    /// The settings.
-    pub fn config(&self) -> &LaserOdometryConfig {
-        &self.config
     }
 
     /// Takes the echoes of a scan (in the laser's frame) and the wheels'
@@ -447,9 +457,10 @@ impl LaserOdometry {
             {
                 let now = kf.pose * m.pose;
                 out.displacement = Displacement {
+                    since: wheels.since,
+                    until: wheels.until,
                     pose: self.pose.inverse() * now,
                     covariance: turned(&m.covariance, kf.pose.theta - self.pose.theta),
-                    ..wheels.clone()
                 };
                 out.matched = Some(m);
             }
@@ -465,6 +476,11 @@ impl LaserOdometry {
             _ => true,
         };
         if renew {
+            if out.matched.is_none() {
+                // Placed by the wheels alone: the scans before it may not
+                // line up with it.
+                self.recent.clear();
+            }
             self.recent
                 .push_back((self.pose, line_points(&self.body, &self.config.matching)));
             while self.recent.len() > self.config.keyframe_scans.max(1) {
@@ -545,6 +561,10 @@ mod tests {
         assert!(m.paired_share > 0.9 && m.rms_m < 0.01, "{m:?}");
         // The covariance is tight where the room fixes the pose.
         assert!(m.covariance.diagonal().iter().all(|v| v.sqrt() < 0.01));
+        // Wheels that say nothing finite are no prior: no match.
+        let echoes = room_echoes(b, 6.0, 4.0, 0.005);
+        let nan = Matrix3::from_element(f64::NAN);
+        assert!(reference.register(&echoes, prior, &nan, &config).is_none());
     }
 
     #[test]
