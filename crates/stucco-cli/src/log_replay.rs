@@ -386,7 +386,6 @@ pub fn run_log_replay(
     );
     let trust = OdometryTrust::default();
     let mut laser_odometry = LaserOdometry::new(LaserOdometryConfig::default(), mount);
-    let mut echoes = Vec::new();
     let mut registered = 0usize;
     let mut extractor = make_extractor(ExtractorKind::Rwht, &laser_for_logs())?;
     let mut points = ScanPoints::default();
@@ -403,9 +402,7 @@ pub fn run_log_replay(
             Displacement::zero(s.scan.stamp)
         };
         let moved = if job.scan_matching {
-            echoes.clear();
-            echoes.extend(points.points().iter().map(|p| p.p));
-            let step = laser_odometry.step(&echoes, &wheels);
+            let step = laser_odometry.step(points.points().iter().map(|p| p.p), &wheels);
             registered += usize::from(step.matched.is_some());
             step.displacement
         } else {

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use stucco_core::{Pose2, wrap_angle};
 
 use crate::association::{Classifier, Decision, Pairing, stacked_covariance};
-use crate::odometry::Displacement;
+use crate::odometry::{Displacement, turned_covariance};
 use crate::wall::Wall;
 use crate::wall_map::{MapWall, WallId, WallMap, WallRole};
 
@@ -261,10 +261,9 @@ impl WallMapEkf {
         let mut f = Matrix3::identity();
         f[(0, 2)] = -s * dp.x - c * dp.y;
         f[(1, 2)] = c * dp.x - s * dp.y;
-        let rot = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
         let n = self.x.len();
         let pose_pose = self.p.fixed_view::<3, 3>(0, 0).into_owned();
-        let new_pose_pose = f * pose_pose * f.transpose() + rot * d.covariance * rot.transpose();
+        let new_pose_pose = f * pose_pose * f.transpose() + turned_covariance(&d.covariance, th);
         self.p
             .fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(0.5 * (new_pose_pose + new_pose_pose.transpose())));

@@ -63,6 +63,14 @@ pub struct Displacement {
     pub covariance: Matrix3<f64>,
 }
 
+/// A covariance over `(x, y, θ)` expressed in a frame turned by `angle`:
+/// its position block rotated, its heading untouched.
+pub(crate) fn turned_covariance(covariance: &Matrix3<f64>, angle: f64) -> Matrix3<f64> {
+    let (s, c) = angle.sin_cos();
+    let rot = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    rot * covariance * rot.transpose()
+}
+
 impl Displacement {
     /// No motion at `at`.
     pub fn zero(at: Stamp) -> Self {

@@ -17,9 +17,9 @@
 //! the estimate.
 
 use crate::door::DoorOpening;
-use crate::odometry::{Displacement, OdometryConfig};
+use crate::odometry::{Displacement, OdometryConfig, turned_covariance};
 use crate::wall::Wall;
-use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix2, SMatrix, SVector, Vector2};
 use serde::Serialize;
 use std::f64::consts::{FRAC_PI_2, PI};
 use stucco_core::{EncoderSample, Pose2, Stamp, wrap_angle};
@@ -348,8 +348,7 @@ pub fn predict(
     let mut f = DMatrix::identity(n, n);
     f[(0, 2)] = -s * dp.x - c * dp.y;
     f[(1, 2)] = c * dp.x - s * dp.y;
-    let rot = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
-    let q = rot * d.covariance * rot.transpose();
+    let q = turned_covariance(&d.covariance, th);
     let mut out_p = &f * p * f.transpose();
     for i in 0..3 {
         for j in 0..3 {

@@ -38,7 +38,7 @@ use rstar::primitives::GeomWithData;
 use serde::{Deserialize, Serialize};
 use stucco_core::{Pose2, wrap_angle};
 
-use crate::odometry::Displacement;
+use crate::odometry::{Displacement, turned_covariance};
 
 /// Settings of the scan matcher.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -204,20 +204,23 @@ impl ScanReference {
         self.lines.is_empty()
     }
 
+    /// The line point nearest `q` if it lies within `gate`, and the
+    /// distance of `q` from its line (signed along its normal).
+    fn pair(&self, q: &Point2<f64>, gate: f64) -> Option<(&LinePoint, f64)> {
+        let nn = self.tree.nearest_neighbor([q.x, q.y])?;
+        let line = &self.lines[nn.data];
+        let d = q - line.p;
+        (d.norm_squared() <= gate * gate).then(|| (line, line.normal.dot(&d)))
+    }
+
     /// How well `points` seen from `pose` lie on the reference's lines:
     /// each echo within `gate` of its nearest line point scores by how
     /// near.
     fn fit_score(&self, points: &[Point2<f64>], pose: Pose2, gate: f64) -> f64 {
         points
             .iter()
-            .filter_map(|p| {
-                let q = pose.transform_point(p);
-                let nn = self.tree.nearest_neighbor([q.x, q.y])?;
-                let line = &self.lines[nn.data];
-                let d = q - line.p;
-                (d.norm_squared() <= gate * gate)
-                    .then(|| 1.0 - (line.normal.dot(&d) / gate).powi(2))
-            })
+            .filter_map(|p| self.pair(&pose.transform_point(p), gate))
+            .map(|(_, e)| 1.0 - (e / gate).powi(2))
             .sum()
     }
 
@@ -285,14 +288,9 @@ impl ScanReference {
             let (mut pairs, mut sum2) = (0usize, 0.0);
             for p in points {
                 let q = pose.transform_point(p);
-                let Some(nn) = self.tree.nearest_neighbor([q.x, q.y]) else {
-                    break;
-                };
-                let line = &self.lines[nn.data];
-                if (q - line.p).norm_squared() > gate * gate {
+                let Some((line, e)) = self.pair(&q, gate) else {
                     continue;
-                }
-                let e = line.normal.dot(&(q - line.p));
+                };
                 let w = if e.abs() <= huber {
                     1.0
                 } else {
@@ -411,13 +409,6 @@ pub struct LaserStep {
     pub matched: Option<ScanMatch>,
 }
 
-/// `covariance` of `(x, y, θ)` with its position turned by `angle`.
-fn turned(covariance: &Matrix3<f64>, angle: f64) -> Matrix3<f64> {
-    let (s, c) = angle.sin_cos();
-    let r = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
-    r * covariance * r.transpose()
-}
-
 impl LaserOdometry {
     /// Laser odometry for a laser mounted at `mount` on the robot.
     pub fn new(config: LaserOdometryConfig, mount: Pose2) -> Self {
@@ -434,14 +425,18 @@ impl LaserOdometry {
     /// Takes the echoes of a scan (in the laser's frame) and the wheels'
     /// displacement since the last scan (zero for the first); returns the
     /// displacement to predict the robot's pose with.
-    pub fn step(&mut self, echoes: &[Point2<f64>], wheels: &Displacement) -> LaserStep {
+    pub fn step(
+        &mut self,
+        echoes: impl IntoIterator<Item = Point2<f64>>,
+        wheels: &Displacement,
+    ) -> LaserStep {
         let max2 = self.config.matching.max_range_m.powi(2);
         self.body.clear();
         self.body.extend(
             echoes
-                .iter()
+                .into_iter()
                 .filter(|p| p.coords.norm_squared() <= max2)
-                .map(|p| self.mount.transform_point(p)),
+                .map(|p| self.mount.transform_point(&p)),
         );
         let guess = self.pose * wheels.pose;
         let mut out = LaserStep {
@@ -450,7 +445,7 @@ impl LaserOdometry {
         };
         if let Some(kf) = &self.keyframe {
             let prior = kf.pose.inverse() * guess;
-            let prior_cov = turned(&wheels.covariance, self.pose.theta - kf.pose.theta);
+            let prior_cov = turned_covariance(&wheels.covariance, self.pose.theta - kf.pose.theta);
             if let Some(m) =
                 kf.reference
                     .register(&self.body, prior, &prior_cov, &self.config.matching)
@@ -460,7 +455,7 @@ impl LaserOdometry {
                     since: wheels.since,
                     until: wheels.until,
                     pose: self.pose.inverse() * now,
-                    covariance: turned(&m.covariance, kf.pose.theta - self.pose.theta),
+                    covariance: turned_covariance(&m.covariance, kf.pose.theta - self.pose.theta),
                 };
                 out.matched = Some(m);
             }
@@ -662,7 +657,7 @@ mod tests {
                 pose: if k == 0 { Pose2::IDENTITY } else { bad_step },
                 covariance: Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 1e-4)),
             };
-            let s = odo.step(&echoes, &d);
+            let s = odo.step(echoes, &d);
             assert_eq!(s.matched.is_some(), k > 0, "step {k}");
             wheels_only = wheels_only * d.pose;
             laser = laser * s.displacement.pose;
