@@ -51,5 +51,5 @@ pub use trace::TraceHash;
 pub use vehicle::{DriveState, DynamicsConfig};
 pub use world::{
     BoxSpec, ColumnSpec, DoorSpec, PersonSpec, RadiatorSpec, RobotStart, RoomSpec, TableSpec,
-    WindowSpec, WorldSpec,
+    TourSpec, WindowSpec, WorldSpec,
 };

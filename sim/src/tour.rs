@@ -3,10 +3,18 @@
 
 use stucco_core::{DriveCommand, Pose2, VehicleSpec};
 
-/// Pure pursuit around a closed loop of waypoints.
+use crate::TourSpec;
+
+/// Fastest backing, m/s: the laser looks forwards.
+const MAX_REVERSE_MPS: f64 = 0.5;
+
+/// Pure pursuit around a closed loop of waypoints, forwards or, on the
+/// legs marked so, backwards.
 #[derive(Clone, Debug)]
 pub struct TourDriver {
     points: Vec<[f64; 2]>,
+    /// Legs driven backwards (leg `i` from point `i` to point `i + 1`).
+    reverse: Vec<usize>,
     lookahead_m: f64,
     speed_mps: f64,
     /// Index of the segment the robot is on.
@@ -15,10 +23,17 @@ pub struct TourDriver {
 
 impl TourDriver {
     /// A driver around `points` (closed: the last leads to the first) at
-    /// `speed_mps`.
+    /// `speed_mps`, forwards all the way.
     pub fn new(points: Vec<[f64; 2]>, speed_mps: f64) -> Self {
+        TourDriver::along(&TourSpec::forwards(points), speed_mps)
+    }
+
+    /// A driver along `tour` at `speed_mps` (backwards at 0.5 m/s at
+    /// most).
+    pub fn along(tour: &TourSpec, speed_mps: f64) -> Self {
         TourDriver {
-            points,
+            points: tour.points.clone(),
+            reverse: tour.reverse.clone(),
             lookahead_m: 0.7,
             speed_mps,
             segment: 0,
@@ -54,10 +69,23 @@ impl TourDriver {
             .inverse()
             .transform_point(&nalgebra::Point2::new(target[0], target[1]));
         let ld2 = local.coords.norm_squared().max(1e-6);
-        // Pure pursuit for a vehicle steered about its rear axle.
+        // Pure pursuit for a vehicle steered about its rear axle: the arc
+        // tangent to the heading through the target, whichever way it is
+        // driven (backing along it, the same steer holds the arc).
         let curvature = 2.0 * local.y / ld2;
         let steer = (curvature * vehicle.wheelbase_m).atan();
-        let speed = self.speed_mps * (1.0 - 0.6 * (steer.abs() / vehicle.max_steer_rad).min(1.0));
+        let slow = 1.0 - 0.6 * (steer.abs() / vehicle.max_steer_rad).min(1.0);
+        if self.reverse.contains(&self.segment) {
+            if local.x > 0.0 {
+                // Ahead while backing: stop rather than turn about.
+                return DriveCommand::STOP;
+            }
+            return DriveCommand {
+                speed_mps: -self.speed_mps.min(MAX_REVERSE_MPS) * slow,
+                steer_rad: steer,
+            };
+        }
+        let speed = self.speed_mps * slow;
         if local.x < 0.0 {
             // Behind: turn on the spot toward it.
             return DriveCommand {

@@ -6,6 +6,7 @@
 
 use crate::SimError;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// A whole world: what a world file holds.
@@ -48,6 +49,32 @@ pub struct WorldSpec {
     /// A collision-free loop of waypoints for benches and demos, m.
     #[serde(default)]
     pub tour: Vec<[f64; 2]>,
+    /// Further drives by name (`[tours.NAME]`), for a world whose rooms
+    /// a loop driven forwards cannot reach.
+    #[serde(default)]
+    pub tours: BTreeMap<String, TourSpec>,
+}
+
+/// A closed loop of waypoints, some legs of it driven backwards: the way
+/// out of a room too narrow to turn in is the way in, reversed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TourSpec {
+    /// Waypoints of the rear axle's middle, m; the last leads to the first.
+    pub points: Vec<[f64; 2]>,
+    /// Legs driven backwards: leg `i` runs from point `i` to point `i + 1`.
+    #[serde(default)]
+    pub reverse: Vec<usize>,
+}
+
+impl TourSpec {
+    /// A loop driven forwards all the way.
+    pub fn forwards(points: Vec<[f64; 2]>) -> Self {
+        TourSpec {
+            points,
+            reverse: Vec::new(),
+        }
+    }
 }
 
 /// The robot's start pose.
@@ -342,7 +369,29 @@ impl WorldSpec {
                 );
             }
         }
+        for (name, t) in &self.tours {
+            if t.points.len() < 2 {
+                return bad(
+                    format!("tours.{name}.points"),
+                    "a tour needs 2 points or more",
+                );
+            }
+            if t.reverse.iter().any(|&l| l >= t.points.len()) {
+                return bad(
+                    format!("tours.{name}.reverse"),
+                    "no such leg: leg i runs from point i to point i + 1",
+                );
+            }
+        }
         Ok(())
+    }
+
+    /// The tour called `name`; `tour` is the world's own loop.
+    pub fn tour_named(&self, name: &str) -> Option<TourSpec> {
+        if name == "tour" {
+            return Some(TourSpec::forwards(self.tour.clone()));
+        }
+        self.tours.get(name).cloned()
     }
 }
 
@@ -357,8 +406,18 @@ fn signed_area(c: &[[f64; 2]]) -> f64 {
 }
 
 /// The line of the table `field` names (`door[2].wall` → the third
-/// `[[door]]`), 0 when it cannot be told.
+/// `[[door]]`, `tours.hall.reverse` → `[tours.hall]`), 0 when it cannot
+/// be told.
 fn find_line(text: &str, field: &str) -> usize {
+    if !field.contains('[')
+        && let Some((table, _)) = field.rsplit_once('.')
+    {
+        let header = format!("[{table}]");
+        return text
+            .lines()
+            .position(|l| l.trim() == header)
+            .map_or(0, |i| i + 1);
+    }
     let (table, index) = match field.split_once('[') {
         Some((t, rest)) => (t, rest.split(']').next().and_then(|n| n.parse().ok())),
         None => (field, Some(0)),
@@ -430,5 +489,21 @@ width_m = 0.9
         );
         let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
         assert!(err.contains("room[0].corners"), "{err}");
+    }
+
+    #[test]
+    fn a_named_tour_with_a_leg_it_lacks_is_refused_at_its_table() {
+        let text =
+            format!("{ROOM}\n[tours.back]\npoints = [[1.0, 1.0], [3.0, 1.0]]\nreverse = [1]\n");
+        let w = WorldSpec::parse(&text, "box.toml").unwrap();
+        assert_eq!(w.tour_named("back").unwrap().reverse, [1]);
+        assert_eq!(w.tour_named("tour").unwrap().points, w.tour);
+        assert!(w.tour_named("front").is_none());
+        let text = text.replace("reverse = [1]", "reverse = [2]");
+        let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
+        assert!(
+            err.contains("box.toml:20") && err.contains("tours.back.reverse"),
+            "{err}"
+        );
     }
 }

@@ -243,3 +243,42 @@ fn dead_reckoning_on_simulated_encoders_follows_the_truth() {
     assert!(exact < 0.01, "{exact}");
     assert!(real > exact && real < 0.5, "{real}");
 }
+
+/// The apartment's mapping drive backs out of the bedroom: the robot goes
+/// through the hall into the bedroom's door and comes back the same way,
+/// touching nothing, backwards on the leg marked so.
+#[test]
+fn the_apartment_tour_backs_out_of_the_bedroom() {
+    let mut w = world("apartment");
+    // Nobody walking: the drive maps the rooms, people are not its test.
+    w.people.clear();
+    let spec = w.tour_named("through-the-hall").unwrap();
+    let vehicle = SimConfig::default().vehicle;
+    for speed in [0.5, 1.0] {
+        let mut sim = Simulator::new(&w, SimConfig::default(), Some(3));
+        let mut driver = TourDriver::along(&spec, speed);
+        let (mut north, mut backed, mut bumped) = (f64::MIN, 0.0, false);
+        // Back in the living room after the bedroom.
+        let mut out_again = false;
+        for _ in 0..(60.0 / 0.02) as usize {
+            let pose = sim.truth().drive.pose;
+            let c = driver.command(&pose, &vehicle);
+            if c.speed_mps < 0.0 {
+                backed += 0.02;
+            }
+            sim.command(c);
+            let r = sim.advance(0.02);
+            bumped |= r.bumper;
+            let p = sim.truth().drive.pose;
+            north = north.max(p.y);
+            out_again |= north > 4.35 && p.y < 2.5;
+        }
+        assert!(!bumped, "at {speed} m/s the robot touched something");
+        assert!(
+            north > 4.35,
+            "at {speed} m/s it reached y = {north:.2} m only"
+        );
+        assert!(backed > 5.0, "at {speed} m/s it backed {backed:.1} s only");
+        assert!(out_again, "at {speed} m/s it did not come back out");
+    }
+}

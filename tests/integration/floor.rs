@@ -1,28 +1,30 @@
-//! A floor mapped while driving (`sim/worlds/floor.toml`: a corridor, four
-//! rooms, two of them the same size, a loop through them), 20 seeds at
-//! 0.5–1.0 m/s with the robot's own laser and odometry: the walls of the
-//! map against the true walls, nothing left in it that lies along no
-//! surface, and the room graph against the rooms and doors driven through.
+//! Floors mapped while driving, 20 seeds each at 0.5–1.0 m/s with the
+//! robot's own laser and odometry: the office floor
+//! (`sim/worlds/floor.toml`: a corridor, four rooms, two of them the same
+//! size, a loop through them) and the apartment (`apartment.toml`: the
+//! living room, the hall crossed into the bedroom and backed out of it).
+//! The walls of the map against the true walls, nothing left in it that
+//! lies along no surface, and the room graph against the rooms and doors
+//! driven through.
 
 use std::path::PathBuf;
 use stucco_cli::{FloorRun, map_floor};
 use stucco_sim::WorldSpec;
 
-fn floor() -> WorldSpec {
-    let path = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../sim/worlds/floor.toml"
-    ));
+fn world(file: &str) -> WorldSpec {
+    let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../sim/worlds")).join(file);
     WorldSpec::load(&path).unwrap()
 }
 
-#[test]
-fn a_floor_is_mapped_with_its_rooms_and_doors() {
-    let world = floor();
+/// Maps `file` along its tour `tour` for `seconds` on seeds `first..first
+/// + 20`, from 0.5 to 1.0 m/s, and asserts issue 5's figures.
+fn map_twenty(file: &str, tour: &str, first: u64, seconds: f64) {
+    let world = world(file);
+    let tour = world.tour_named(tour).unwrap();
     let runs: Vec<FloorRun> = (0..20u64)
         .map(|k| {
             let speed = 0.5 + 0.5 * k as f64 / 19.0;
-            map_floor(&world, 100 + k, speed, 200.0).unwrap()
+            map_floor(&world, &tour, first + k, speed, seconds).unwrap()
         })
         .collect();
     let mut correct = 0;
@@ -65,4 +67,14 @@ fn a_floor_is_mapped_with_its_rooms_and_doors() {
     assert!(angle <= 0.3f64.to_radians(), "{angle}");
     assert!(runs.iter().all(|r| r.stray_walls == 0));
     assert!(correct >= 19, "{correct} of 20");
+}
+
+#[test]
+fn a_floor_is_mapped_with_its_rooms_and_doors() {
+    map_twenty("floor.toml", "tour", 100, 200.0);
+}
+
+#[test]
+fn the_apartment_is_mapped_through_its_hall() {
+    map_twenty("apartment.toml", "through-the-hall", 200, 120.0);
 }

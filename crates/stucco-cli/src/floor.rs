@@ -7,11 +7,12 @@
 use anyhow::Result;
 use nalgebra::{Point2, Vector2};
 use serde::Serialize;
-use stucco_core::{LaserSpec, wrap_angle};
+use stucco_core::{LaserSpec, Pose2, wrap_angle};
 use stucco_nav::{
-    Defeature, DefeaturedLaser, OdometryConfig, RoomGraph, RoomGraphConfig, Rpe, WallMapEkf,
+    Defeature, DefeaturedLaser, MapWall, OdometryConfig, RoomGraph, RoomGraphConfig, Rpe,
+    WallMapEkf,
 };
-use stucco_sim::{DynamicsConfig, Layout, OpeningKind, SimConfig, Solid, WorldSpec};
+use stucco_sim::{DynamicsConfig, Layout, OpeningKind, SimConfig, Solid, TourSpec, WorldSpec};
 
 use crate::study::{Drive, MATCH_ANGLE_RAD, MATCH_DIST_M, MATCH_OVERHANG_M, map_run_with, record};
 
@@ -45,7 +46,7 @@ pub struct FloorRun {
 
 /// The vertical faces at height `z` of every box of `layout` (walls,
 /// radiators, furniture, legs) as `(a, b, normal)`.
-fn faces(layout: &Layout, z: f64) -> Vec<(Point2<f64>, Point2<f64>, Vector2<f64>)> {
+fn faces(layout: &Layout, z: f64) -> Vec<Face> {
     let mut out = Vec::new();
     for s in &layout.solids {
         let Solid::Box {
@@ -79,12 +80,72 @@ fn faces(layout: &Layout, z: f64) -> Vec<(Point2<f64>, Point2<f64>, Vector2<f64>
     out
 }
 
-/// Building walls of `ekf`'s map along no surface of `faces`: less than
-/// half of the wall's seen stretch covered by faces that lie on its line
-/// (a door's gap in a wall is not a fault).
-fn stray(ekf: &WallMapEkf, faces: &[(Point2<f64>, Point2<f64>, Vector2<f64>)]) -> usize {
-    ekf.map()
-        .building_walls()
+/// A face of the world: its ends and its normal, as a map wall's (from
+/// the free side into the solid).
+type Face = (Point2<f64>, Point2<f64>, Vector2<f64>);
+
+/// The rotation (rad, about the origin) and then the shift (m) that put the
+/// map's building walls best on the faces they lie nearest: a map drifts
+/// as a whole (its frame turned by the first turn's odometry), which is no
+/// false association. Weighted least squares over walls within 3° and
+/// 20 cm of a face.
+fn frame_fit(walls: &[MapWall], faces: &[Face]) -> (f64, Vector2<f64>) {
+    let pairs: Vec<(&MapWall, f64, Vector2<f64>, f64)> = walls
+        .iter()
+        .filter_map(|w| {
+            faces
+                .iter()
+                .filter_map(|(a, b, n)| {
+                    let alpha = n.y.atan2(n.x);
+                    let mid = nalgebra::center(a, b);
+                    let off = w.in_front(&mid).abs();
+                    (wrap_angle(w.alpha_rad - alpha).abs() < 3f64.to_radians() && off < 0.2)
+                        .then_some((off, alpha, *n, n.dot(&a.coords)))
+                })
+                .min_by(|x, y| x.0.total_cmp(&y.0))
+                .map(|(_, alpha, n, rho)| (w, alpha, n, rho))
+        })
+        .collect();
+    let total: f64 = pairs.iter().map(|(w, ..)| w.length_m()).sum();
+    if total <= 0.0 {
+        return (0.0, Vector2::zeros());
+    }
+    let turn = pairs
+        .iter()
+        .map(|(w, alpha, ..)| w.length_m() * wrap_angle(alpha - w.alpha_rad))
+        .sum::<f64>()
+        / total;
+    // ρ of a turned wall is unchanged; the shift t moves it by n·t.
+    let (mut a, mut b) = (nalgebra::Matrix2::zeros(), Vector2::zeros());
+    for (w, _, n, rho) in &pairs {
+        a += n * n.transpose() * w.length_m();
+        b += n * ((rho - w.rho_m) * w.length_m());
+    }
+    let shift = a.try_inverse().map_or(Vector2::zeros(), |inv| inv * b);
+    (turn, shift)
+}
+
+/// Building walls of `ekf`'s map along no surface of `faces`, the map put
+/// on the world's frame ([`frame_fit`]): less than half of the wall's seen
+/// stretch covered by faces that lie on its line (a door's gap in a wall
+/// is not a fault).
+fn stray(ekf: &WallMapEkf, faces: &[Face]) -> usize {
+    let walls: Vec<MapWall> = ekf.map().building_walls().cloned().collect();
+    let (turn, shift) = frame_fit(&walls, faces);
+    walls
+        .into_iter()
+        .map(|w| {
+            let [a, b] = w.ends().map(|e| {
+                let (s, c) = turn.sin_cos();
+                Point2::new(c * e.x - s * e.y, s * e.x + c * e.y) + shift
+            });
+            let mut moved = w.clone();
+            moved.alpha_rad = wrap_angle(w.alpha_rad + turn);
+            moved.rho_m = moved.normal().dot(&a.coords);
+            let (ta, tb) = (moved.along(&a), moved.along(&b));
+            moved.extent_m = [ta.min(tb), ta.max(tb)];
+            moved
+        })
         .filter(|w| {
             let mut covered: Vec<(f64, f64)> = faces
                 .iter()
@@ -218,8 +279,15 @@ fn check_graph(graph: &mut RoomGraph, layout: &Layout, path: &[Point2<f64>]) -> 
     Ok(())
 }
 
-/// Maps `world` from a drive of `seconds` at `speed_mps` with `seed`.
-pub fn map_floor(world: &WorldSpec, seed: u64, speed_mps: f64, seconds: f64) -> Result<FloorRun> {
+/// Maps `world` from a drive of `seconds` along `tour` at `speed_mps`
+/// with `seed`.
+pub fn map_floor(
+    world: &WorldSpec,
+    tour: &TourSpec,
+    seed: u64,
+    speed_mps: f64,
+    seconds: f64,
+) -> Result<FloorRun> {
     let laser = LaserSpec::ibeo_ladar_2d();
     let drive = Drive {
         seconds,
@@ -230,14 +298,18 @@ pub fn map_floor(world: &WorldSpec, seed: u64, speed_mps: f64, seconds: f64) -> 
     };
     let mut world = world.clone();
     world.people.clear();
-    let rec = record(&drive, &world, &laser, seed)?;
+    let rec = record(&drive, &world, tour, &laser, seed)?;
     let layout = Layout::of(&world);
     let full = DefeaturedLaser::new(&laser, &Defeature::default())?;
     let mut graph = RoomGraph::new(RoomGraphConfig::default());
+    // The room the robot is in is the one its body's middle is in (its
+    // pose is the rear axle's, a long way back when it noses into a room).
+    let vehicle = SimConfig::default().vehicle;
+    let middle = Pose2::new(0.5 * vehicle.length_m - vehicle.rear_overhang_m, 0.0, 0.0);
     let (score, ekf) = map_run_with(&drive, &rec, &full, &layout, seed, |ekf| {
-        graph.update(&ekf.pose(), ekf.walls());
+        graph.update(&(ekf.pose() * middle), ekf.walls());
     })?;
-    let path: Vec<Point2<f64>> = rec.truth_path();
+    let path: Vec<Point2<f64>> = rec.truth_path(&middle);
     let check = check_graph(&mut graph, &layout, &path);
     let z = SimConfig::default().vehicle.laser_height_m;
     let m = &score.map;

@@ -29,7 +29,7 @@ use stucco_nav::{
     Defeature, DefeaturedLaser, Displacement, OdometryConfig, Pairs, Rpe, ScanPoints,
     WallMapConfig, WallMapEkf, WallRole, relative_pose_error, sensor_twist, twist_at, wheel_steps,
 };
-use stucco_sim::{DynamicsConfig, Layout, SimConfig, Simulator, TourDriver, WorldSpec};
+use stucco_sim::{DynamicsConfig, Layout, SimConfig, Simulator, TourDriver, TourSpec, WorldSpec};
 
 use crate::mission::{BadInput, line_of, parse_toml};
 use crate::navigator::DT_S;
@@ -378,9 +378,13 @@ pub(crate) struct Recording {
 }
 
 impl Recording {
-    /// The true path, one point a control period.
-    pub(crate) fn truth_path(&self) -> Vec<nalgebra::Point2<f64>> {
-        self.truth.iter().map(|(_, p)| p.position()).collect()
+    /// The true path of the point `at` (in the robot's frame), one point
+    /// a control period.
+    pub(crate) fn truth_path(&self, at: &Pose2) -> Vec<nalgebra::Point2<f64>> {
+        self.truth
+            .iter()
+            .map(|(_, p)| (*p * *at).position())
+            .collect()
     }
 
     /// The true pose at `t`, interpolated between control periods.
@@ -442,10 +446,12 @@ fn study_world(study: &Study, world: &WorldSpec) -> WorldSpec {
     w
 }
 
-/// Drives the tour once with `laser`, keeping every sensor reading.
+/// Drives `tour` once in `world` with `laser`, keeping every sensor
+/// reading.
 pub(crate) fn record(
     drive: &Drive,
     world: &WorldSpec,
+    tour: &TourSpec,
     laser: &LaserSpec,
     seed: u64,
 ) -> Result<Recording> {
@@ -457,7 +463,7 @@ pub(crate) fn record(
     };
     let vehicle = config.vehicle.clone();
     let mut sim = Simulator::new(world, config, Some(seed));
-    let mut driver = TourDriver::new(world.tour.clone(), drive.speed_mps);
+    let mut driver = TourDriver::along(tour, drive.speed_mps);
     let steps = (drive.seconds / DT_S).round() as usize;
     let mut rec = Recording {
         encoders: Vec::with_capacity(steps + 1),
@@ -754,7 +760,13 @@ pub fn run_study(job: &StudyJob, progress: impl Fn(usize, usize) + Sync) -> Resu
             let seed = study.seed.wrapping_add(k);
             let mut scores = Vec::with_capacity(settings.len());
             for (p, preset) in presets.iter().enumerate() {
-                let rec = record(&drive, &world, preset, seed)?;
+                let rec = record(
+                    &drive,
+                    &world,
+                    &TourSpec::forwards(world.tour.clone()),
+                    preset,
+                    seed,
+                )?;
                 for (i, s) in settings.iter().enumerate().filter(|(_, s)| s.preset == p) {
                     let noise_seed = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i as u64;
                     let score = map_run(&drive, &rec, &s.laser, &layout, noise_seed).with_context(

@@ -5,13 +5,19 @@
 //! the resolution comes from the fit. Iteratively reweighted total least
 //! squares with Tukey's biweight rejects the clutter inside the gate — a
 //! radiator 10 cm in front of its wall, a person's legs — and the seen part
-//! is split at gaps, so collinear but separate walls are not merged.
+//! is split at gaps, so collinear but separate walls are not merged. What
+//! stands free before the surface behind it (a table's leg) is no wall's:
+//! a line fitted along a face and the legs beside it tilts.
 
 use crate::points::ScanPoint;
 use crate::wall::Wall;
 use nalgebra::{Matrix2, Point2, Vector2};
 use serde::{Deserialize, Serialize};
 use stucco_core::wrap_angle;
+
+/// A gap along a fit beyond which fewer than `min_points` echoes at its
+/// end are not part of it, m.
+const SPARSE_GAP_M: f64 = 0.3;
 
 /// Settings of the robust line fit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -148,8 +154,12 @@ impl LineFitter {
             }
         }
         if !chained {
+            // Unsettled (a few echoes at the cut-off going in and out): the
+            // last line's gap-free run, refitted if cut.
             self.select(pts, taken, line, cut, false);
-            self.keep_longest_run(pts, line);
+            if self.keep_longest_run(pts, line) {
+                line = weighted_tls(pts, &self.candidates, &self.weights)?;
+            }
         }
         self.finish(pts, line)
     }
@@ -198,7 +208,9 @@ impl LineFitter {
     }
 
     /// Keeps the candidates of the heaviest run without gaps longer than
-    /// `max_gap_m` along the line. Returns whether anything was dropped.
+    /// `max_gap_m` along the line, less fewer than `min_points` echoes
+    /// within `BLOB_MAX_M` beyond a gap of `SPARSE_GAP_M` at either end.
+    /// Returns whether anything was dropped.
     fn keep_longest_run(&mut self, pts: &[ScanPoint], line: Line) -> bool {
         let u = line.normal();
         let dir = Vector2::new(-u.y, u.x);
@@ -224,10 +236,29 @@ impl LineFitter {
                 best = (start, j + 1);
             }
         }
-        if best.1 - best.0 == self.along.len() {
+        // A few echoes close together beyond a gap at either end (a door
+        // jamb's edge seen past the door) do not carry a wall on by more
+        // than half its length.
+        let (mut lo, mut hi) = best;
+        let t = |j: usize| self.along[j].0;
+        let few =
+            |a: usize, b: usize| b - a < self.config.min_points && t(b - 1) - t(a) <= BLOB_MAX_M;
+        if let Some(g) = (lo + 1..hi).find(|&j| t(j) - t(j - 1) > SPARSE_GAP_M)
+            && few(lo, g)
+            && t(g) - t(lo) > 0.5 * (t(hi - 1) - t(g))
+        {
+            lo = g;
+        }
+        if let Some(g) = (lo + 1..hi).rev().find(|&j| t(j) - t(j - 1) > SPARSE_GAP_M)
+            && few(g, hi)
+            && t(hi - 1) - t(g - 1) > 0.5 * (t(g - 1) - t(lo))
+        {
+            hi = g;
+        }
+        if hi - lo == self.along.len() {
             return false;
         }
-        let keep: Vec<usize> = self.along[best.0..best.1].iter().map(|&(_, k)| k).collect();
+        let keep: Vec<usize> = self.along[lo..hi].iter().map(|&(_, k)| k).collect();
         let mut keep_sorted = keep;
         keep_sorted.sort_unstable();
         self.candidates = keep_sorted.iter().map(|&k| self.candidates[k]).collect();
@@ -297,6 +328,44 @@ impl LineFitter {
     }
 }
 
+/// Widest run of echoes taken for a thing standing free (a table's or a
+/// chair's leg, a person's), m.
+const BLOB_MAX_M: f64 = 0.15;
+
+/// Marks in `taken` the echoes of things standing free before what is
+/// behind them: runs of echoes of adjacent beams no wider than
+/// `BLOB_MAX_M`, nearer by more than three noise scales than the echoes
+/// on both sides (or with no echo on a side). No wall rests on them: a line
+/// fitted along a bed's foot and the legs of the desk beside it tilts.
+pub(crate) fn mark_free_standing(pts: &[ScanPoint], noise_sigma_m: f64, taken: &mut [bool]) {
+    let jump = 3.0 * noise_sigma_m;
+    let adjacent = |i: usize| pts[i + 1].beam == pts[i].beam + 1;
+    let mut start = 0;
+    while start < pts.len() {
+        // The run of adjacent echoes with no jump in range.
+        let mut end = start + 1;
+        while end < pts.len()
+            && adjacent(end - 1)
+            && (pts[end].range_m - pts[end - 1].range_m).abs() <= jump
+        {
+            end += 1;
+        }
+        // The run's farthest echo.
+        let near = pts[start..end]
+            .iter()
+            .fold(0.0, |m: f64, p| m.max(p.range_m));
+        // Farther on a side: an echo there beyond the jump, or none at all
+        // (a beam without echo sees nothing near).
+        let before = start > 0 && (!adjacent(start - 1) || pts[start - 1].range_m > near + jump);
+        let after = end < pts.len() && (!adjacent(end - 1) || pts[end].range_m > near + jump);
+        let width = (pts[end - 1].p - pts[start].p).norm();
+        if before && after && width <= BLOB_MAX_M {
+            taken[start..end].iter_mut().for_each(|t| *t = true);
+        }
+        start = end;
+    }
+}
+
 /// Weighted total least squares line through `pts[idx]`, with `d ≥ 0`.
 pub(crate) fn weighted_tls(pts: &[ScanPoint], idx: &[usize], w: &[f64]) -> Option<Line> {
     let mut sw = 0.0;
@@ -327,4 +396,84 @@ pub(crate) fn weighted_tls(pts: &[ScanPoint], idx: &[usize], w: &[f64]) -> Optio
         gamma += std::f64::consts::PI;
     }
     Some(Line::new(d, wrap_angle(gamma)))
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use rand_distr::{Distribution, Normal};
+
+    /// Echoes of a laser at the origin on the faces `x = depth` from `y0`
+    /// to `y1`, every 2 cm, in beam order, with 5 mm of noise along x.
+    fn faces(parts: &[(f64, f64, f64)], seed: u64) -> Vec<ScanPoint> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let noise = Normal::new(0.0, 0.005).unwrap();
+        let mut pts = Vec::new();
+        for &(depth, y0, y1) in parts {
+            let mut y = y0;
+            while y <= y1 {
+                let p = Point2::new(depth + noise.sample(&mut rng), y);
+                pts.push(ScanPoint {
+                    p,
+                    range_m: p.coords.norm(),
+                    bearing_rad: p.y.atan2(p.x),
+                    beam: pts.len(),
+                });
+                y += 0.02;
+            }
+        }
+        pts
+    }
+
+    fn fit(pts: &[ScanPoint]) -> LineFit {
+        let mut fitter = LineFitter::new(FitConfig {
+            noise_sigma_m: 0.01,
+            ..FitConfig::default()
+        });
+        fitter
+            .fit(pts, &vec![false; pts.len()], 0..pts.len())
+            .unwrap()
+    }
+
+    #[test]
+    fn one_flat_face_is_not_split() {
+        for seed in 0..10 {
+            let pts = faces(&[(2.0, -1.0, 0.9)], seed);
+            let f = fit(&pts);
+            assert_eq!(f.support.len(), pts.len(), "seed {seed}");
+            assert!(f.wall.length_m() > 1.85);
+        }
+    }
+
+    #[test]
+    fn a_few_echoes_beyond_a_gap_do_not_carry_a_wall_on() {
+        // A door's jamb edge 0.5 m past the end of a wall seen 0.6 m long,
+        // on its line.
+        let mut pts = faces(&[(2.0, -0.4, 0.2), (2.0, 0.7, 0.76)], 3);
+        let f = fit(&pts);
+        assert!(f.wall.length_m() < 0.65, "{:?}", f.wall);
+        // Past a wall seen 1.2 m long it adds less than half: kept.
+        pts = faces(&[(2.0, -1.0, 0.2), (2.0, 0.7, 0.76)], 3);
+        assert!(fit(&pts).wall.length_m() > 1.7);
+        // Eight echoes or more beyond the gap are the wall's next piece.
+        pts = faces(&[(2.0, -0.4, 0.2), (2.0, 0.7, 0.9)], 3);
+        assert!(fit(&pts).wall.length_m() > 1.25);
+    }
+
+    #[test]
+    fn legs_before_a_face_are_marked_and_the_face_is_not() {
+        let mut pts = faces(&[(2.0, -1.0, 0.2)], 4);
+        // Two echoes of a leg 15 cm before the face, in the middle.
+        for k in [30, 31] {
+            pts[k].p.x -= 0.15;
+            pts[k].range_m = pts[k].p.coords.norm();
+        }
+        let mut taken = vec![false; pts.len()];
+        mark_free_standing(&pts, 0.01, &mut taken);
+        let marked: Vec<usize> = (0..pts.len()).filter(|&i| taken[i]).collect();
+        assert_eq!(marked, [30, 31]);
+    }
 }

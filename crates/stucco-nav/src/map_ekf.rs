@@ -17,6 +17,11 @@
 //!   stretch from its free side, is marked [`WallRole::InFront`]: a
 //!   table's legs in a row, a cabinet, a glass wall's frames (the "large
 //!   false door" of paper A, corrected once the wall behind is seen).
+//! - A line that lies along a longer wall of the map, close to it but a
+//!   few degrees askew, is a fit across two surfaces (a wall and a shut
+//!   door's leaf recessed in it, seen far off through a door): it founds
+//!   nothing until seen more often than the wall, and one founded before
+//!   the wall was mapped is marked [`WallRole::Across`] once the wall is.
 
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3, Point2, Vector2};
 use serde::{Deserialize, Serialize};
@@ -137,6 +142,9 @@ pub struct MapUpdate {
     pub merged: Vec<(WallId, WallId)>,
     /// Walls found to stand in front of a wall by this scan.
     pub in_front: Vec<WallId>,
+    /// Walls found to be fits across two surfaces by this scan: each lies
+    /// askew along a longer wall.
+    pub across: Vec<WallId>,
 }
 
 /// A wall seen but not yet in the map.
@@ -398,7 +406,37 @@ impl WallMapEkf {
             .collect();
         let merged = self.merge_around(&touched);
         update.merged.extend(merged);
+        update.across = self.mark_askew(&touched);
         update
+    }
+
+    /// Marks [`WallRole::Across`] the building walls that lie askew along a
+    /// longer wall of `touched`: lines fitted across that wall and what is
+    /// recessed in it or stands before it, founded before the wall itself
+    /// was mapped. They stay landmarks (the filter keeps them as they are);
+    /// they bound no room.
+    fn mark_askew(&mut self, touched: &[WallId]) -> Vec<WallId> {
+        let mut marked = Vec::new();
+        for &id in touched {
+            let Some(a) = self.walls.iter().position(|w| w.id == id) else {
+                continue;
+            };
+            if self.walls[a].role != WallRole::Wall {
+                continue;
+            }
+            for b in 0..self.walls.len() {
+                let (wall, v) = (&self.walls[a], &self.walls[b]);
+                if b != a
+                    && v.role == WallRole::Wall
+                    && v.length_m() < wall.length_m()
+                    && askew_along(&self.config, v.alpha_rad, &v.ends(), wall)
+                {
+                    self.walls[b].role = WallRole::Across;
+                    marked.push(self.walls[b].id);
+                }
+            }
+        }
+        marked
     }
 
     /// The walls of one scan with the pieces of each line joined: each
@@ -547,8 +585,9 @@ impl WallMapEkf {
     /// scan: parallel, facing the same way, less than `in_front_depth_m`
     /// before it, the laser on their free side, and the wall behind seen
     /// across their own seen stretch (past a table's legs, through a glass
-    /// wall's frames, on both sides of a cabinet). A step in a wall, whose
-    /// two parts only meet, is not marked.
+    /// wall's frames, on both sides of a cabinet) and longer. A step in a
+    /// wall, whose two parts only meet, is not marked; nor is a wall with
+    /// something shorter recessed in it (a shut door's leaf).
     fn mark_in_front(&mut self, matched: &[(usize, usize)], laser: &Pose2) -> Vec<WallId> {
         let from = laser.position();
         let cfg = &self.config;
@@ -562,6 +601,7 @@ impl WallMapEkf {
                 let behind = &self.walls[b];
                 let depth = behind.rho_m - front.rho_m;
                 b != f
+                    && behind.length_m() > front.length_m()
                     && wrap_angle(behind.alpha_rad - front.alpha_rad).abs() < cfg.parallel_rad
                     && depth > cfg.in_front_min_depth_m
                     && depth < cfg.in_front_depth_m
@@ -619,9 +659,7 @@ impl WallMapEkf {
         let ends = z.ends.map(|e| laser.transform_point(&e));
         let [a, b] = ends.map(|e| along(&e));
         let (lo, hi) = (a.min(b), a.max(b));
-        if self.askew_of_a_wall(alpha, &ends) {
-            return None;
-        }
+        let rival = self.askew_rival(alpha, &ends);
         let cfg = &self.config;
         let scans = self.scans;
         // Sightings agree when their difference fits both uncertainties
@@ -659,39 +697,41 @@ impl WallMapEkf {
         c.extent_m = [c.extent_m[0].min(lo), c.extent_m[1].max(hi)];
         c.sightings += 1;
         c.last_scan = scans;
-        if c.sightings < self.config.confirm_scans {
+        if c.sightings < self.config.confirm_scans || rival.is_some_and(|o| c.sightings <= o) {
             return None;
         }
-        let extent_m = self.candidates.swap_remove(k).extent_m;
-        Some(self.augment(z, r, extent_m))
+        let c = self.candidates.swap_remove(k);
+        Some(self.augment(z, r, c.extent_m, c.sightings))
     }
 
     /// Whether a stretch seen from `ends[0]` to `ends[1]` (map frame), at
     /// angle `alpha`, lies along a map wall's stretch, close to it, but at
     /// an angle no face before a wall stands at: walls that meet do so at
     /// their ends, and what stands before a wall (a radiator, a cabinet) is
-    /// parallel to it. Such a line is a fit across two surfaces (a wall
-    /// and the radiator before it, seen far off at a grazing angle through
-    /// a door) and founds nothing.
-    fn askew_of_a_wall(&self, alpha: f64, ends: &[Point2<f64>; 2]) -> bool {
-        let cfg = &self.config;
-        self.walls.iter().any(|w| {
-            let angle = wrap_angle(alpha - w.alpha_rad).abs();
-            if angle < cfg.parallel_rad || angle > ASKEW_MAX_RAD {
-                return false;
-            }
-            let near = ends
-                .iter()
-                .all(|e| w.in_front(e).abs() < cfg.in_front_min_depth_m + ASKEW_BAND_M);
-            let [ta, tb] = ends.map(|e| w.along(&e));
-            let overlap = ta.max(tb).min(w.extent_m[1]) - ta.min(tb).max(w.extent_m[0]);
-            near && overlap > cfg.in_front_overlap_m
-        })
+    /// parallel to it. Such a line, when shorter than the wall, is a fit
+    /// across two surfaces (a wall and the radiator before it, seen far
+    /// off at a grazing angle through a door) and founds nothing until it
+    /// is seen more often than the wall: returns the most observations of
+    /// such a wall. A longer line is the wall the map holds a fit across,
+    /// and founds it (the fit is then marked, [`WallMapEkf::mark_askew`]).
+    fn askew_rival(&self, alpha: f64, ends: &[Point2<f64>; 2]) -> Option<u32> {
+        let length = (ends[1] - ends[0]).norm();
+        self.walls
+            .iter()
+            .filter(|w| w.length_m() >= length && askew_along(&self.config, alpha, ends, w))
+            .map(|w| w.observations)
+            .max()
     }
 
     /// Adds the wall observed as `z` (noise `r`) to the state, correlated
-    /// with the pose it was seen from.
-    fn augment(&mut self, z: &Wall, r: &Matrix2<f64>, extent_m: [f64; 2]) -> WallId {
+    /// with the pose it was seen from, after `sightings` sightings.
+    fn augment(
+        &mut self,
+        z: &Wall,
+        r: &Matrix2<f64>,
+        extent_m: [f64; 2],
+        sightings: u32,
+    ) -> WallId {
         let (rho, alpha, own) = self.line_in_map(z, r);
         let g_pose = self.line_jacobians(z).0;
         let n = self.x.len();
@@ -713,7 +753,7 @@ impl WallMapEkf {
             alpha_rad: alpha,
             covariance: own,
             extent_m,
-            observations: 1,
+            observations: sightings,
             wall_behind_scans: 0,
             role: WallRole::Wall,
         });
@@ -769,7 +809,6 @@ impl WallMapEkf {
     /// then removes it from the state.
     fn merge(&mut self, keep: usize, drop: usize) {
         let (rk, rd) = (row(keep), row(drop));
-        let n = self.x.len();
         let nu = Vector2::new(
             self.x[rd] - self.x[rk],
             wrap_angle(self.x[rd + 1] - self.x[rk + 1]),
@@ -787,13 +826,7 @@ impl WallMapEkf {
         let keep_id = self.walls[keep].id;
         let kept = self.walls[drop].observations;
         let through = self.walls[drop].wall_behind_scans;
-        let order: Vec<usize> = (0..n).filter(|&k| k != rd && k != rd + 1).collect();
-        self.x = DVector::from_iterator(order.len(), order.iter().map(|&k| self.x[k]));
-        self.p = self.p.select_rows(&order).select_columns(&order);
-        self.walls.remove(drop);
-        for i in 0..self.walls.len() {
-            self.sync_wall(i);
-        }
+        self.remove(drop);
         let keep = self.walls.iter().position(|w| w.id == keep_id).unwrap_or(0);
         let w = &mut self.walls[keep];
         let [a, b] = ends.map(|e| w.along(&e));
@@ -801,6 +834,36 @@ impl WallMapEkf {
         w.observations += kept;
         w.wall_behind_scans = w.wall_behind_scans.max(through);
     }
+
+    /// Removes wall `i` from the state (marginalises it out: its rows and
+    /// columns go).
+    fn remove(&mut self, i: usize) {
+        let r = row(i);
+        let n = self.x.len();
+        let order: Vec<usize> = (0..n).filter(|&k| k != r && k != r + 1).collect();
+        self.x = DVector::from_iterator(order.len(), order.iter().map(|&k| self.x[k]));
+        self.p = self.p.select_rows(&order).select_columns(&order);
+        self.walls.remove(i);
+        for k in 0..self.walls.len() {
+            self.sync_wall(k);
+        }
+    }
+}
+
+/// Whether a stretch seen from `ends[0]` to `ends[1]` (map frame), at
+/// angle `alpha`, lies along `wall`'s stretch, close to it, but at an angle
+/// no face before a wall stands at (see [`WallMapEkf::askew_rival`]).
+fn askew_along(cfg: &WallMapConfig, alpha: f64, ends: &[Point2<f64>; 2], wall: &MapWall) -> bool {
+    let angle = wrap_angle(alpha - wall.alpha_rad).abs();
+    if angle < cfg.parallel_rad || angle > ASKEW_MAX_RAD {
+        return false;
+    }
+    let near = ends
+        .iter()
+        .all(|e| wall.in_front(e).abs() < cfg.in_front_min_depth_m + ASKEW_BAND_M);
+    let [ta, tb] = ends.map(|e| wall.along(&e));
+    let overlap = ta.max(tb).min(wall.extent_m[1]) - ta.min(tb).max(wall.extent_m[0]);
+    near && overlap > cfg.in_front_overlap_m
 }
 
 /// Makes `p` exactly symmetric, in place (rounding leaves the update's two

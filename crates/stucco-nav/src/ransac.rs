@@ -7,7 +7,7 @@
 
 use crate::NavError;
 use crate::extractor::WallExtractor;
-use crate::line_fit::{FitConfig, Line, LineFitter};
+use crate::line_fit::{FitConfig, Line, LineFitter, mark_free_standing};
 use crate::points::{ScanPoint, ScanPoints};
 use crate::wall::Wall;
 use rand::{RngExt, SeedableRng};
@@ -137,6 +137,7 @@ impl WallExtractor for RansacExtractor {
         let pts = points.points();
         self.taken.clear();
         self.taken.resize(pts.len(), false);
+        mark_free_standing(pts, self.config.fit.noise_sigma_m, &mut self.taken);
         let mut walls = Vec::new();
         let mut failures = 0;
         while walls.len() < self.config.max_walls && failures < 3 {

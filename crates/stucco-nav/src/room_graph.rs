@@ -13,6 +13,13 @@
 //! rooms told apart by where they are), or a new node. The crossing is the
 //! door: which side of the room, left, middle or right along it, and the
 //! heading it was passed in.
+//!
+//! A hall too narrow to stand `enter_m` inside it on both sides (crossed
+//! from one door to the door facing it) is measured within 40 % of its
+//! width. No side is taken beyond the back of a wall the robot stands
+//! behind: just through a door, before the near face of the next room's
+//! wall is mapped, the rooms on both sides of the wall would make one
+//! rectangle.
 
 use nalgebra::{Point2, Vector2};
 use serde::{Deserialize, Serialize};
@@ -20,6 +27,10 @@ use stucco_core::{Pose2, wrap_angle};
 
 use crate::error::NavError;
 use crate::wall_map::{MapWall, building};
+
+/// Share of a narrow room's width the robot must stand inside it for the
+/// room to be measured.
+const NARROW_ENTER: f64 = 0.4;
 
 /// Settings of the room graph.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -44,7 +55,8 @@ pub struct RoomGraphConfig {
     /// it, m.
     pub leave_m: f64,
     /// How far inside the room it comes into the robot must stand for
-    /// that room to be measured, m.
+    /// that room to be measured, m; in a room narrower than `enter_m / 0.4`
+    /// (a hall crossed from door to door), 40 % of its width.
     pub enter_m: f64,
     /// Two rooms whose sides agree within this are one, m: less than a
     /// wall's thickness, so the rooms on either side of a wall differ.
@@ -59,8 +71,8 @@ pub struct RoomGraphConfig {
 impl Default for RoomGraphConfig {
     fn default() -> Self {
         RoomGraphConfig {
-            min_wall_m: 1.5,
-            max_door_m: 1.4,
+            min_wall_m: 1.1,
+            max_door_m: 2.0,
             same_line_m: 0.05,
             parallel_rad: 5f64.to_radians(),
             door_slack_m: 0.2,
@@ -316,48 +328,22 @@ impl RoomGraph {
                 phi.cos() * out.x - phi.sin() * out.y,
                 phi.sin() * out.x + phi.cos() * out.y,
             );
-            // Pieces of wall on this side that face the robot.
-            let pieces: Vec<&MapWall> = building(walls)
-                .filter(|w| {
-                    w.normal().dot(&dir_map) > cfg.parallel_rad.cos() && w.in_front(p) > 0.0
-                })
-                .collect();
-            let same_line = |a: &MapWall, b: &MapWall| {
-                a.id != b.id && (a.in_front(p) - b.in_front(p)).abs() < cfg.same_line_m
+            // Pieces of wall on this side that face the robot, and those
+            // whose back it stands behind (it came through a door in them).
+            let facing = |w: &&MapWall, toward: f64| {
+                toward * w.normal().dot(&dir_map) > cfg.parallel_rad.cos()
+                    && toward * w.in_front(p) > 0.0
             };
-            // The gap along the line between two pieces' stretches, m.
-            let gap = |a: &MapWall, b: &MapWall| {
-                (a.extent_m[0] - b.extent_m[1]).max(b.extent_m[0] - a.extent_m[1])
-            };
-            let reaches = |w: &MapWall| {
-                let t = w.along(p);
-                // The pieces of its line this piece is one wall with,
-                // across doors.
-                let partners: Vec<&&MapWall> = pieces
-                    .iter()
-                    .filter(|o| same_line(w, o) && gap(w, o) <= cfg.max_door_m)
-                    .collect();
-                let long = w.length_m() + partners.iter().map(|o| o.length_m()).sum::<f64>()
-                    >= cfg.min_wall_m;
-                let covers =
-                    t > w.extent_m[0] - cfg.door_slack_m && t < w.extent_m[1] + cfg.door_slack_m;
-                // Or the robot faces a door in it: a piece of the line on
-                // the other side of the gap.
-                let door = partners.iter().any(|o| {
-                    let (left, right) = if w.extent_m[1] < t {
-                        (w.extent_m[1], o.extent_m[0])
-                    } else {
-                        (o.extent_m[1], w.extent_m[0])
-                    };
-                    left < t && right > t
-                });
-                long && (covers || door)
-            };
-            let d = pieces
-                .iter()
-                .filter(|w| reaches(w))
-                .map(|w| w.in_front(p))
-                .min_by(f64::total_cmp)?;
+            let pieces: Vec<&MapWall> = building(walls).filter(|w| facing(w, 1.0)).collect();
+            let backs: Vec<&MapWall> = building(walls).filter(|w| facing(w, -1.0)).collect();
+            let d = Self::nearest_reaching(cfg, &pieces, p)?;
+            // A side beyond the back of a wall is the next room's: from
+            // within a door's depth, or before the near face of the wall
+            // it came through is mapped, the rooms on both sides would
+            // make one rectangle.
+            if Self::nearest_reaching(cfg, &backs, p).is_some_and(|b| -b < d) {
+                return None;
+            }
             let k = side.index();
             rect[k] = match side {
                 RoomSide::West => q.x - d,
@@ -367,6 +353,53 @@ impl RoomGraph {
             };
         }
         Some(rect)
+    }
+
+    /// Distance from `p` (along their normal, signed as
+    /// [`MapWall::in_front`]) to the nearest of `pieces` (parallel walls on
+    /// one side of `p`) that reaches past it: long enough with the pieces
+    /// of its line, and covering `p`'s projection or a door facing it.
+    fn nearest_reaching(
+        cfg: &RoomGraphConfig,
+        pieces: &[&MapWall],
+        p: &Point2<f64>,
+    ) -> Option<f64> {
+        let same_line = |a: &MapWall, b: &MapWall| {
+            a.id != b.id && (a.in_front(p) - b.in_front(p)).abs() < cfg.same_line_m
+        };
+        // The gap along the line between two pieces' stretches, m.
+        let gap = |a: &MapWall, b: &MapWall| {
+            (a.extent_m[0] - b.extent_m[1]).max(b.extent_m[0] - a.extent_m[1])
+        };
+        let reaches = |w: &MapWall| {
+            let t = w.along(p);
+            // The pieces of its line this piece is one wall with, across
+            // doors.
+            let partners: Vec<&&MapWall> = pieces
+                .iter()
+                .filter(|o| same_line(w, o) && gap(w, o) <= cfg.max_door_m)
+                .collect();
+            let long =
+                w.length_m() + partners.iter().map(|o| o.length_m()).sum::<f64>() >= cfg.min_wall_m;
+            let covers =
+                t > w.extent_m[0] - cfg.door_slack_m && t < w.extent_m[1] + cfg.door_slack_m;
+            // Or the robot faces a door in it: a piece of the line on the
+            // other side of the gap.
+            let door = partners.iter().any(|o| {
+                let (left, right) = if w.extent_m[1] < t {
+                    (w.extent_m[1], o.extent_m[0])
+                } else {
+                    (o.extent_m[1], w.extent_m[0])
+                };
+                left < t && right > t
+            });
+            long && (covers || door)
+        };
+        pieces
+            .iter()
+            .filter(|w| reaches(w))
+            .map(|w| w.in_front(p))
+            .min_by(|a, b| a.abs().total_cmp(&b.abs()))
     }
 
     /// The floor's orientation: the walls' dominant direction (modulo a
@@ -416,7 +449,8 @@ impl RoomGraph {
             }
             // Through a door: which room is this?
             let rect = rect?;
-            let m = self.config.enter_m;
+            let narrow = (rect[1] - rect[0]).min(rect[3] - rect[2]);
+            let m = self.config.enter_m.min(NARROW_ENTER * narrow);
             let inside =
                 q.x > rect[0] + m && q.x < rect[1] - m && q.y > rect[2] + m && q.y < rect[3] - m;
             if !inside {
@@ -786,6 +820,76 @@ mod tests {
             graph.doors().iter().all(|d| d.passages == 2),
             "{:?}",
             graph.doors()
+        );
+    }
+
+    /// The apartment's rooms round its hall: a living room L [0, 5] × [0,
+    /// 2.85], a hall H [0, 8] × [3, 4.2] (1.2 m wide) and a bedroom B [0,
+    /// 4] × [4.35, 8], the walls 0.15 m thick; a door from L into H (x 3.1
+    /// to 4) and one from H into B (x 3 to 3.8), nearly facing each other.
+    /// With `bedroom_near_face`, B's south face is mapped.
+    fn apartment(bedroom_near_face: bool) -> WallMap {
+        let mut walls = vec![
+            face(0, (0.0, 0.0), (5.0, 0.0)),
+            face(1, (5.0, 0.0), (5.0, 2.85)),
+            face(2, (5.0, 2.85), (4.0, 2.85)),
+            face(3, (3.1, 2.85), (0.0, 2.85)),
+            face(4, (0.0, 2.85), (0.0, 0.0)),
+            face(5, (0.0, 3.0), (8.0, 3.0)),
+            face(6, (8.0, 3.0), (8.0, 4.2)),
+            face(7, (8.0, 4.2), (3.8, 4.2)),
+            face(8, (3.0, 4.2), (0.0, 4.2)),
+            face(9, (0.0, 4.2), (0.0, 3.0)),
+            face(10, (4.0, 4.35), (4.0, 8.0)),
+            face(11, (4.0, 8.0), (0.0, 8.0)),
+            face(12, (0.0, 8.0), (0.0, 4.35)),
+        ];
+        if bedroom_near_face {
+            walls.push(face(13, (0.0, 4.35), (3.0, 4.35)));
+            walls.push(face(14, (3.8, 4.35), (4.0, 4.35)));
+        }
+        WallMap {
+            walls,
+            pose: Pose2::IDENTITY,
+        }
+    }
+
+    #[test]
+    fn a_hall_crossed_from_door_to_door_is_a_room_between_two_doors() {
+        let map = apartment(true);
+        let mut graph = RoomGraph::new(RoomGraphConfig::default());
+        // Straight across the hall into the bedroom and back out, twice.
+        let there_and_back = [(3.6, 1.5), (3.3, 5.3), (3.6, 1.5)];
+        drive(&mut graph, &map, &there_and_back);
+        drive(&mut graph, &map, &there_and_back);
+        let rooms = graph.rooms();
+        assert_eq!(rooms.len(), 3, "{rooms:?}");
+        let near =
+            |r: &Room, b: [f64; 4]| r.bounds.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9);
+        assert!(near(&rooms[1], [0.0, 8.0, 3.0, 4.2]), "{:?}", rooms[1]);
+        assert!(near(&rooms[2], [0.0, 4.0, 4.35, 8.0]), "{:?}", rooms[2]);
+        let pairs: Vec<[usize; 2]> = graph.doors().iter().map(|d| d.rooms).collect();
+        assert_eq!(pairs, [[0, 1], [1, 2]]);
+        assert!(graph.doors().iter().all(|d| d.passages == 4));
+    }
+
+    #[test]
+    fn a_room_is_not_measured_across_the_wall_it_was_entered_through() {
+        // Just through the bedroom's door, before its own south face is
+        // mapped: the hall's far face lies behind the robot's back, so the
+        // hall's south face beyond it is no side of the bedroom.
+        let map = apartment(false);
+        let mut graph = RoomGraph::new(RoomGraphConfig::default());
+        graph.update(&Pose2::new(2.0, 1.5, 0.0), &map.walls);
+        let past_the_door = Point2::new(3.4, 4.6);
+        assert_eq!(graph.rectangle(&map.walls, &past_the_door), None);
+        // Its south face mapped, the bedroom is measured.
+        let map = apartment(true);
+        let rect = graph.rectangle(&map.walls, &past_the_door).unwrap();
+        let truth = [0.0, 4.0, 4.35, 8.0];
+        assert!(
+            rect.iter().zip(truth).all(|(a, b)| (a - b).abs() < 1e-9),
+            "{rect:?}"
         );
     }
 

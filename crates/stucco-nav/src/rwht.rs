@@ -10,7 +10,7 @@
 use crate::NavError;
 use crate::extractor::WallExtractor;
 use crate::hough::{HoughConfig, Weighting};
-use crate::line_fit::{FitConfig, LineFitter};
+use crate::line_fit::{FitConfig, LineFitter, mark_free_standing};
 use crate::points::{ScanPoint, ScanPoints};
 use crate::segments::{Segment, SegmentTransform, Segmenter};
 use crate::wall::Wall;
@@ -196,6 +196,8 @@ impl WallExtractor for RwhtExtractor {
         let taken = &self.taken;
         self.segments
             .retain(|s| (s.first..s.end).all(|i| !taken[i]));
+        // What stands free votes in no run; no wall takes it either.
+        mark_free_standing(pts, self.config.fit.noise_sigma_m, &mut self.taken);
         self.spent.clear();
         self.spent.resize(self.segments.len(), false);
         let threshold = self.threshold(points.angle_increment_rad());

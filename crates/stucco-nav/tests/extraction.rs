@@ -137,6 +137,67 @@ fn clutter_away_from_walls_leaves_walls_unchanged() {
     );
 }
 
+/// The foot of a bed and, beside it, the legs of a desk and of the chair
+/// pushed under it, a little nearer: a line fitted along the bed's foot
+/// that takes the legs tilts (the apartment's bedroom seen from its door).
+/// Every wall found must lie along the bed's foot.
+#[test]
+fn a_face_with_legs_standing_beside_it_is_not_fitted_into_one_tilted_line() {
+    let laser = SyntheticLaser::new(LaserSpec::ibeo_ladar_2d());
+    let mut rwht = RwhtExtractor::new(RwhtConfig {
+        hough: HoughConfig {
+            surface_noise_m: 0.02,
+            ..HoughConfig::default()
+        },
+        ..RwhtConfig::default()
+    })
+    .unwrap();
+    let leg = |x: f64, y: f64| synthetic::Circle {
+        center: nalgebra::Point2::new(x, y),
+        radius: 0.025,
+        velocity: nalgebra::Vector2::zeros(),
+    };
+    // The bed's foot along y = 6.1 from x = 0.2 to 2.2; the desk's legs at
+    // y = 5.95, the chair's at 6.04.
+    let world = synthetic::World {
+        segments: vec![synthetic::Segment {
+            a: nalgebra::Point2::new(0.2, 6.1),
+            b: nalgebra::Point2::new(2.2, 6.1),
+        }],
+        circles: vec![
+            leg(2.45, 5.95),
+            leg(3.55, 5.95),
+            leg(2.84, 6.04),
+            leg(3.16, 6.04),
+        ],
+    };
+    let (mut found, mut tilted) = (0, Vec::new());
+    for seed in 0..40u64 {
+        // From the bedroom's door and inside it, 1 to 2.2 m off.
+        let y = 3.9 + 0.03 * seed as f64;
+        let pose = Pose2::new(3.4, y, std::f64::consts::FRAC_PI_2);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let scan = laser.scan(&world, &pose, &Twist2::default(), Stamp::ZERO, &mut rng);
+        for w in rwht.extract(&ScanPoints::from_scan(&scan)) {
+            found += 1;
+            let off = wrap_angle(w.gamma_rad + pose.theta - std::f64::consts::FRAC_PI_2);
+            if off.abs() > 3.0 * w.sigma_gamma_rad() + 0.3f64.to_radians() {
+                tilted.push(format!(
+                    "from y = {y:.2} m: a wall {:.2}° ({:.1} σ) off the bed's foot, {} points",
+                    off.to_degrees(),
+                    off.abs() / w.sigma_gamma_rad(),
+                    w.points,
+                ));
+            }
+        }
+    }
+    assert!(
+        found >= 30,
+        "the bed's foot was found {found} times in 40 scans"
+    );
+    assert!(tilted.is_empty(), "{tilted:#?}");
+}
+
 /// A scan taken at 0.8 m/s while turning is bent; correcting it under
 /// constant velocity brings the walls back to where they are at the stamp.
 #[test]

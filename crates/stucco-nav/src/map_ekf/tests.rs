@@ -661,7 +661,7 @@ fn pieces_of_one_line_in_a_scan_count_once() {
 }
 
 #[test]
-fn a_line_askew_along_a_wall_founds_nothing() {
+fn a_line_askew_along_a_longer_wall_is_held_back_by_it() {
     // A known wall y = 7 (facing the robot below it) from x = 0 to 18.
     let wall = MapWall {
         id: 0,
@@ -684,16 +684,89 @@ fn a_line_askew_along_a_wall_founds_nothing() {
         Matrix3::zeros(),
     );
     let p = |x: f64, y: f64| Point2::new(x, y);
-    // Tilted 5° across the wall and the radiator before it: refused.
+    // Tilted 5° across the wall and the radiator before it: held back
+    // until seen more often than the wall.
     let askew = (FRAC_PI_2 + 5f64.to_radians(), [p(6.7, 7.02), p(9.1, 6.82)]);
-    assert!(f.askew_of_a_wall(askew.0, &askew.1));
+    assert_eq!(f.askew_rival(askew.0, &askew.1), Some(100));
     // The radiator's face itself, parallel 10 cm before the wall: a face
     // before a wall, founded.
-    assert!(!f.askew_of_a_wall(FRAC_PI_2, &[p(7.6, 6.9), p(9.1, 6.9)]));
+    assert_eq!(f.askew_rival(FRAC_PI_2, &[p(7.6, 6.9), p(9.1, 6.9)]), None);
     // A wall meeting it at a right angle, and one at 20° ending at it:
     // other walls.
-    assert!(!f.askew_of_a_wall(0.0, &[p(10.0, 3.0), p(10.0, 7.0)]));
-    assert!(!f.askew_of_a_wall(FRAC_PI_2 + 20f64.to_radians(), &[p(6.0, 6.9), p(8.0, 6.2)]));
+    assert_eq!(f.askew_rival(0.0, &[p(10.0, 3.0), p(10.0, 7.0)]), None);
+    assert_eq!(
+        f.askew_rival(FRAC_PI_2 + 20f64.to_radians(), &[p(6.0, 6.9), p(8.0, 6.2)]),
+        None
+    );
     // Askew but well away from the wall (a table's edge in the room).
-    assert!(!f.askew_of_a_wall(askew.0, &[p(6.7, 5.02), p(9.1, 4.82)]));
+    assert_eq!(f.askew_rival(askew.0, &[p(6.7, 5.02), p(9.1, 4.82)]), None);
+}
+
+/// An observation in the frame of a laser at the origin facing +x of the
+/// line from `a` to `b` (its normal away from the laser).
+fn seen(a: (f64, f64), b: (f64, f64), points: u32) -> Wall {
+    let (a, b) = (Point2::new(a.0, a.1), Point2::new(b.0, b.1));
+    let u = (b - a).normalize();
+    let mut n = Vector2::new(-u.y, u.x);
+    if n.dot(&a.coords) < 0.0 {
+        n = -n;
+    }
+    Wall {
+        d_m: n.dot(&a.coords),
+        gamma_rad: n.y.atan2(n.x),
+        covariance: Matrix2::new(1e-4, 0.0, 0.0, 1e-4),
+        points: points as usize,
+        rms_residual_m: 0.01,
+        ends: [a, b],
+    }
+}
+
+#[test]
+fn a_fit_across_a_wall_and_a_door_leaf_is_marked_once_the_wall_is_mapped() {
+    // The first sightings, far off through a door: the wall (x = 3) and a
+    // shut door's leaf recessed 7.5 cm in it, fitted as one line 4° askew.
+    let mut f = WallMapEkf::new(WallMapConfig::default(), Pose2::IDENTITY, Matrix3::zeros());
+    let askew = seen((3.0, -0.2), (3.0 + 1.3 * 4f64.to_radians().tan(), 1.1), 24);
+    for _ in 0..4 {
+        f.scan(std::slice::from_ref(&askew));
+    }
+    assert_eq!(f.map().walls.len(), 1, "the askew fit is founded first");
+    let askew_id = f.map().walls[0].id;
+    // Then the wall itself, seen whole from near: founded, and the askew
+    // fit along it marked, no wall of the building any more.
+    let wall = seen((3.0, -4.0), (3.0, 4.0), 300);
+    let mut across = Vec::new();
+    for _ in 0..12 {
+        across.extend(f.scan(std::slice::from_ref(&wall)).across);
+    }
+    assert_eq!(across, [askew_id]);
+    let map = f.map();
+    let building: Vec<&MapWall> = map.building_walls().collect();
+    assert_eq!(building.len(), 1, "{building:?}");
+    assert!((building[0].rho_m - 3.0).abs() < 0.01 && building[0].alpha_rad.abs() < 0.01);
+    // The askew fit seen again, less often than the wall, founds nothing
+    // beside it.
+    for _ in 0..6 {
+        f.scan(std::slice::from_ref(&askew));
+    }
+    assert_eq!(f.map().walls.len(), 2);
+    assert_eq!(f.map().building_walls().count(), 1);
+}
+
+#[test]
+fn a_wall_with_a_shorter_face_recessed_in_it_stays_a_wall() {
+    // A wall at x = 3, 6 m, and a shut door's leaf 7.5 cm behind it seen
+    // through its frame, 0.7 m: the leaf stands behind, not the wall in
+    // front of something.
+    let mut f = WallMapEkf::new(WallMapConfig::default(), Pose2::IDENTITY, Matrix3::zeros());
+    let wall = [
+        seen((3.0, -3.0), (3.0, -0.35), 200),
+        seen((3.0, 0.35), (3.0, 3.0), 200),
+    ];
+    let leaf = seen((3.075, -0.35), (3.075, 0.35), 30);
+    for _ in 0..10 {
+        f.scan(&[wall[0].clone(), wall[1].clone(), leaf.clone()]);
+    }
+    let roles: Vec<WallRole> = f.map().walls.iter().map(|w| w.role).collect();
+    assert!(roles.iter().all(|r| *r == WallRole::Wall), "{roles:?}");
 }
