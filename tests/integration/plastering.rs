@@ -292,7 +292,10 @@ fn the_apartment_is_plastered_room_by_room_in_one_job() {
 /// The demo killed in the kitchen and resumed: the resumed run reports
 /// the whole job, its plastering time (the part before the kill counts)
 /// and the windows of the rooms left before the kill with the rest.
+/// The whole job twice over the default run's budget (340 s in debug):
+/// the living room's kill and resume stays in it.
 #[test]
+#[ignore = "slow: the whole apartment job; run with --release -- --ignored"]
 fn the_apartment_killed_in_the_kitchen_and_resumed_reports_the_whole_job() {
     let dir = tempfile::tempdir().unwrap();
     let first = run_file("demo", dir.path(), false, Some(3000.0));
