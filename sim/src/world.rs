@@ -369,7 +369,17 @@ impl WorldSpec {
                 );
             }
         }
+        let finite = |points: &[[f64; 2]]| points.iter().flatten().all(|c| c.is_finite());
+        if !finite(&self.tour) {
+            return bad("tour".into(), "a tour's points must be finite numbers");
+        }
         for (name, t) in &self.tours {
+            if !finite(&t.points) {
+                return bad(
+                    format!("tours.{name}.points"),
+                    "a tour's points must be finite numbers",
+                );
+            }
             if t.points.len() < 2 {
                 return bad(
                     format!("tours.{name}.points"),
@@ -406,9 +416,17 @@ fn signed_area(c: &[[f64; 2]]) -> f64 {
 }
 
 /// The line of the table `field` names (`door[2].wall` → the third
-/// `[[door]]`, `tours.hall.reverse` → `[tours.hall]`), 0 when it cannot
-/// be told.
+/// `[[door]]`, `tours.hall.reverse` → `[tours.hall]`, `tour` → its key's
+/// line in the top table), 0 when it cannot be told.
 fn find_line(text: &str, field: &str) -> usize {
+    if !field.contains(['.', '['])
+        && let Some(i) = text
+            .lines()
+            .take_while(|l| !l.trim_start().starts_with('['))
+            .position(|l| l.split_once('=').is_some_and(|(k, _)| k.trim() == field))
+    {
+        return i + 1;
+    }
     if !field.contains('[')
         && let Some((table, _)) = field.rsplit_once('.')
     {
@@ -503,6 +521,27 @@ width_m = 0.9
         let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
         assert!(
             err.contains("box.toml:20") && err.contains("tours.back.reverse"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_tour_through_a_point_that_is_no_number_is_refused_at_its_line() {
+        let text = ROOM.replace(
+            "tour = [[1.0, 1.0], [3.0, 1.0]]",
+            "tour = [[1.0, 1.0], [nan, 1.0]]",
+        );
+        let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
+        let line = ROOM.lines().position(|l| l.starts_with("tour =")).unwrap() + 1;
+        assert!(
+            err.contains(&format!("box.toml:{line}")) && err.contains("finite"),
+            "{err}"
+        );
+        let text = format!("{ROOM}\n[tours.back]\npoints = [[1.0, 1.0], [3.0, inf]]\n");
+        let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
+        let line = text.lines().position(|l| l == "[tours.back]").unwrap() + 1;
+        assert!(
+            err.contains(&format!("box.toml:{line}")) && err.contains("tours.back.points"),
             "{err}"
         );
     }

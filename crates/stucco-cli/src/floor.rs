@@ -15,6 +15,7 @@ use stucco_nav::{
 use stucco_sim::{DynamicsConfig, Layout, OpeningKind, SimConfig, Solid, TourSpec, WorldSpec};
 
 use crate::study::{Drive, MATCH_ANGLE_RAD, MATCH_DIST_M, MATCH_OVERHANG_M, map_run_with, record};
+use crate::walls::ExtractorKind;
 
 /// One floor mapped.
 #[derive(Clone, Debug, Serialize)]
@@ -84,12 +85,12 @@ fn faces(layout: &Layout, z: f64) -> Vec<Face> {
 /// the free side into the solid).
 type Face = (Point2<f64>, Point2<f64>, Vector2<f64>);
 
-/// The rotation (rad, about the origin) and then the shift (m) that put the
+/// The motion (a turn about the origin, then a shift) that puts the
 /// map's building walls best on the faces they lie nearest: a map drifts
 /// as a whole (its frame turned by the first turn's odometry), which is no
 /// false association. Weighted least squares over walls within 3° and
 /// 20 cm of a face.
-fn frame_fit(walls: &[MapWall], faces: &[Face]) -> (f64, Vector2<f64>) {
+fn frame_fit(walls: &[MapWall], faces: &[Face]) -> Pose2 {
     let pairs: Vec<(&MapWall, f64, Vector2<f64>, f64)> = walls
         .iter()
         .filter_map(|w| {
@@ -108,7 +109,7 @@ fn frame_fit(walls: &[MapWall], faces: &[Face]) -> (f64, Vector2<f64>) {
         .collect();
     let total: f64 = pairs.iter().map(|(w, ..)| w.length_m()).sum();
     if total <= 0.0 {
-        return (0.0, Vector2::zeros());
+        return Pose2::IDENTITY;
     }
     let turn = pairs
         .iter()
@@ -122,7 +123,7 @@ fn frame_fit(walls: &[MapWall], faces: &[Face]) -> (f64, Vector2<f64>) {
         b += n * ((rho - w.rho_m) * w.length_m());
     }
     let shift = a.try_inverse().map_or(Vector2::zeros(), |inv| inv * b);
-    (turn, shift)
+    Pose2::new(shift.x, shift.y, turn)
 }
 
 /// Building walls of `ekf`'s map along no surface of `faces`, the map put
@@ -131,21 +132,10 @@ fn frame_fit(walls: &[MapWall], faces: &[Face]) -> (f64, Vector2<f64>) {
 /// is not a fault).
 fn stray(ekf: &WallMapEkf, faces: &[Face]) -> usize {
     let walls: Vec<MapWall> = ekf.map().building_walls().cloned().collect();
-    let (turn, shift) = frame_fit(&walls, faces);
+    let onto_world = frame_fit(&walls, faces);
     walls
-        .into_iter()
-        .map(|w| {
-            let [a, b] = w.ends().map(|e| {
-                let (s, c) = turn.sin_cos();
-                Point2::new(c * e.x - s * e.y, s * e.x + c * e.y) + shift
-            });
-            let mut moved = w.clone();
-            moved.alpha_rad = wrap_angle(w.alpha_rad + turn);
-            moved.rho_m = moved.normal().dot(&a.coords);
-            let (ta, tb) = (moved.along(&a), moved.along(&b));
-            moved.extent_m = [ta.min(tb), ta.max(tb)];
-            moved
-        })
+        .iter()
+        .map(|w| w.transformed(&onto_world))
         .filter(|w| {
             let mut covered: Vec<(f64, f64)> = faces
                 .iter()
@@ -295,6 +285,7 @@ pub fn map_floor(
         dynamics: DynamicsConfig::default(),
         odometry: OdometryConfig::default(),
         rpe_pair_m: 1.0,
+        extractor: ExtractorKind::Rwht,
     };
     let mut world = world.clone();
     world.people.clear();

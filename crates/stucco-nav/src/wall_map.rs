@@ -90,6 +90,21 @@ impl MapWall {
     pub fn gap_to(&self, a: f64, b: f64) -> f64 {
         self.extent_m[0].max(a.min(b)) - self.extent_m[1].min(a.max(b))
     }
+
+    /// The wall moved with its frame by `pose` (a point `p` of the line
+    /// goes to `pose · p`): its line, its stretch and the covariance of
+    /// `(ρ, α)`, whose `ρ` now also moves with `α` about the new origin.
+    pub fn transformed(&self, pose: &Pose2) -> MapWall {
+        let mut moved = self.clone();
+        moved.alpha_rad = stucco_core::wrap_angle(self.alpha_rad + pose.theta);
+        let t = Vector2::new(pose.x, pose.y);
+        moved.rho_m = self.rho_m + moved.normal().dot(&t);
+        let shift = moved.direction().dot(&t);
+        moved.extent_m = self.extent_m.map(|e| e + shift);
+        let j = Matrix2::new(1.0, shift, 0.0, 1.0);
+        moved.covariance = j * self.covariance * j.transpose();
+        moved
+    }
 }
 
 /// A map that can be saved and loaded: the walls, the robot's pose when it
@@ -140,5 +155,36 @@ mod tests {
         assert!((b - Point2::new(3.0, 2.0)).norm() < 1e-12);
         assert_eq!(w.gap_to(2.5, 4.0), 0.5);
         assert_eq!(w.gap_to(1.0, 0.0), -1.0);
+    }
+
+    #[test]
+    fn a_moved_wall_keeps_its_ends_and_its_free_side() {
+        let w = MapWall {
+            id: 0,
+            rho_m: 3.0,
+            alpha_rad: 0.3,
+            covariance: Matrix2::new(1e-4, 2e-6, 2e-6, 1e-5),
+            extent_m: [-1.0, 2.0],
+            observations: 1,
+            wall_behind_scans: 0,
+            role: WallRole::Wall,
+        };
+        let pose = Pose2::new(1.5, -0.7, 2.9);
+        let moved = w.transformed(&pose);
+        for (e, m) in w.ends().iter().zip(moved.ends()) {
+            assert!((pose.transform_point(e) - m).norm() < 1e-12);
+        }
+        let free = Point2::new(0.5, 0.2);
+        assert!(w.in_front(&free) > 0.0);
+        let in_front = moved.in_front(&pose.transform_point(&free));
+        assert!((in_front - w.in_front(&free)).abs() < 1e-12);
+        // ρ's variance grows by α's times the lever arm squared.
+        let arm = moved.direction().dot(&Vector2::new(pose.x, pose.y));
+        let var = 1e-4 + 2.0 * arm * 2e-6 + arm * arm * 1e-5;
+        assert!((moved.covariance[(0, 0)] - var).abs() < 1e-15);
+        assert_eq!(moved.covariance[(1, 1)], 1e-5);
+        let back = moved.transformed(&pose.inverse());
+        assert!((back.rho_m - w.rho_m).abs() < 1e-12);
+        assert!((back.covariance - w.covariance).norm() < 1e-15);
     }
 }
