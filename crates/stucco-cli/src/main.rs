@@ -568,10 +568,11 @@ fn run_study_command(job: StudyJob, json: bool) -> ExitCode {
         return print_json(&report);
     }
     println!(
-        "{}: {} de-featured on {}, {} seeds × {:.0} s, RPE pairs {} m apart; {} runs mapped from {} drives in {:.1} s",
+        "{}: {} de-featured on {}, walls by {}, {} seeds × {:.0} s, RPE pairs {} m apart; {} runs mapped from {} drives in {:.1} s",
         report.study,
         report.laser,
         report.world,
+        report.extractor.name(),
         report.seeds,
         report.seconds,
         report.rpe_pair_m,

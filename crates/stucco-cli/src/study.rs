@@ -88,6 +88,10 @@ pub struct Study {
     /// The scanners compared on the same drive.
     #[serde(default)]
     pub compare: Compare,
+    /// The wall extractor every run is mapped on: `rwht`, stucco's, or
+    /// `ransac`, the paper's (its line segments were found by RANSAC).
+    #[serde(default)]
+    pub extractor: ExtractorKind,
 }
 
 fn one_metre() -> f64 {
@@ -321,6 +325,8 @@ pub struct StudyReport {
     pub world: String,
     /// The preset the axes make worse.
     pub laser: String,
+    /// The wall extractor the runs were mapped on.
+    pub extractor: ExtractorKind,
     /// Seed of the first run.
     pub seed: u64,
     /// Runs per setting.
@@ -420,6 +426,8 @@ pub(crate) struct Drive {
     pub(crate) odometry: OdometryConfig,
     /// Poses of each RPE pair are this far apart, m.
     pub(crate) rpe_pair_m: f64,
+    /// The wall extractor the map is built on.
+    pub(crate) extractor: ExtractorKind,
 }
 
 impl Study {
@@ -430,6 +438,7 @@ impl Study {
             dynamics: self.dynamics.clone(),
             odometry: self.odometry.clone(),
             rpe_pair_m: self.rpe_pair_m,
+            extractor: self.extractor,
         }
     }
 }
@@ -571,7 +580,7 @@ pub(crate) fn map_run_with(
     let mount = vehicle.laser_mount;
     let odo = &drive.odometry;
     let mut rng = ChaCha8Rng::seed_from_u64(noise_seed);
-    let mut extractor = make_extractor(ExtractorKind::Rwht, &laser.spec)?;
+    let mut extractor = make_extractor(drive.extractor, &laser.spec)?;
     let Some(first) = rec.scans.first() else {
         anyhow::bail!("the drive gave no scans");
     };
@@ -754,19 +763,14 @@ pub fn run_study(job: &StudyJob, progress: impl Fn(usize, usize) + Sync) -> Resu
     // Seed by seed (two at a time on two cores): each preset driven once,
     // then every setting of it mapped, so at most a few drives are kept.
     let drive = study.drive();
+    let tour = TourSpec::forwards(world.tour.clone());
     let per_seed: Vec<Vec<RunScore>> = (0..seeds)
         .into_par_iter()
         .map(|k| -> Result<Vec<RunScore>> {
             let seed = study.seed.wrapping_add(k);
             let mut scores = Vec::with_capacity(settings.len());
             for (p, preset) in presets.iter().enumerate() {
-                let rec = record(
-                    &drive,
-                    &world,
-                    &TourSpec::forwards(world.tour.clone()),
-                    preset,
-                    seed,
-                )?;
+                let rec = record(&drive, &world, &tour, preset, seed)?;
                 for (i, s) in settings.iter().enumerate().filter(|(_, s)| s.preset == p) {
                     let noise_seed = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i as u64;
                     let score = map_run(&drive, &rec, &s.laser, &layout, noise_seed).with_context(
@@ -787,6 +791,7 @@ pub fn run_study(job: &StudyJob, progress: impl Fn(usize, usize) + Sync) -> Resu
         study: study.name.clone(),
         world: world.name.clone(),
         laser: study.defeature.laser.clone(),
+        extractor: study.extractor,
         seed: study.seed,
         seeds,
         seconds: study.seconds,
@@ -941,6 +946,21 @@ mod tests {
         assert!(e.starts_with("s.toml:4:") && e.contains("seeds"), "{e}");
         let e = refused(&format!("{}[compare]\nscanners = [\"lidar\"]\n", text("")));
         assert!(e.starts_with("s.toml:12:") && e.contains("`lidar`"), "{e}");
+        // The extractor: stucco's unless the file names the paper's.
+        assert_eq!(ok.extractor, ExtractorKind::Rwht);
+        let with = |name: &str| {
+            text("").replace(
+                "speed_mps = 0.5\n",
+                &format!("speed_mps = 0.5\nextractor = \"{name}\"\n"),
+            )
+        };
+        let ransac = Study::parse(&with("ransac"), Path::new("s.toml")).unwrap();
+        assert_eq!(ransac.extractor, ExtractorKind::Ransac);
+        let e = refused(&with("hough"));
+        assert!(
+            e.starts_with("s.toml:7:") && e.contains("`hough`") && e.contains("`ransac`"),
+            "{e}"
+        );
     }
 
     #[test]

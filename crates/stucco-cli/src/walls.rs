@@ -5,7 +5,7 @@ use crate::carmen::{LoggedScan, open_carmen_file};
 use crate::plan_view::{PlanPath, draw_plan};
 use anyhow::{Context, Result};
 use nalgebra::{Point2, Vector2};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -16,14 +16,25 @@ use stucco_nav::{
     RwhtExtractor, ScanPoints, Wall, WallExtractor, find_doors,
 };
 
-/// Which extractor `stucco walls` runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+/// Which wall extractor `stucco walls` runs, or a study maps on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ExtractorKind {
     /// The range-weighted Hough transform.
+    #[default]
     Rwht,
     /// The RANSAC baseline.
     Ransac,
+}
+
+impl ExtractorKind {
+    /// Its name, as files and the command line spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ExtractorKind::Rwht => "rwht",
+            ExtractorKind::Ransac => "ransac",
+        }
+    }
 }
 
 /// What `stucco walls` was asked to do.
