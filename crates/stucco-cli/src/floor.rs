@@ -292,15 +292,19 @@ pub fn map_floor(
     let rec = record(&drive, &world, tour, &laser, seed)?;
     let layout = Layout::of(&world);
     let full = DefeaturedLaser::new(&laser, &Defeature::default())?;
-    let mut graph = RoomGraph::new(RoomGraphConfig::default());
-    // The room the robot is in is the one its body's middle is in (its
-    // pose is the rear axle's, a long way back when it noses into a room).
+    // The robot is in the room its body's middle is in, ahead of its rear
+    // axle.
     let vehicle = SimConfig::default().vehicle;
-    let middle = Pose2::new(0.5 * vehicle.length_m - vehicle.rear_overhang_m, 0.0, 0.0);
+    let ahead = 0.5 * vehicle.length_m - vehicle.rear_overhang_m;
+    let mut graph = RoomGraph::new(RoomGraphConfig {
+        body_middle_ahead_m: ahead,
+        ..RoomGraphConfig::default()
+    });
     let (score, ekf) = map_run_with(&drive, &rec, &full, &layout, seed, |ekf| {
-        graph.update(&(ekf.pose() * middle), ekf.walls());
+        graph.update(&ekf.pose(), ekf.walls());
     })?;
-    let path: Vec<Point2<f64>> = rec.truth_path(&middle);
+    // Checked along the true path of the same point of the body.
+    let path: Vec<Point2<f64>> = rec.truth_path(&Pose2::new(ahead, 0.0, 0.0));
     let check = check_graph(&mut graph, &layout, &path);
     let z = SimConfig::default().vehicle.laser_height_m;
     let m = &score.map;

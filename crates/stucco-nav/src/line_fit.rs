@@ -15,10 +15,6 @@ use nalgebra::{Matrix2, Point2, Vector2};
 use serde::{Deserialize, Serialize};
 use stucco_core::wrap_angle;
 
-/// A gap along a fit beyond which fewer than `min_points` echoes at its
-/// end are not part of it, m.
-const SPARSE_GAP_M: f64 = 0.3;
-
 /// Settings of the robust line fit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -36,6 +32,15 @@ pub struct FitConfig {
     /// A gap longer than this along the line splits it into separate walls, m
     /// (longer than the widest door, so a door does not split its wall).
     pub max_gap_m: f64,
+    /// Widest run of echoes taken for a thing standing free (a table's or
+    /// a chair's leg, a person's), m: no wall rests on it.
+    pub free_standing_max_m: f64,
+    /// Fewer than `min_points` echoes within `free_standing_max_m` beyond
+    /// a gap this long at a fit's end (a door jamb's edge seen past the
+    /// door) are not part of it, m…
+    pub end_gap_m: f64,
+    /// …when they would lengthen it by more than this share of the rest.
+    pub end_growth_max: f64,
 }
 
 impl Default for FitConfig {
@@ -47,6 +52,9 @@ impl Default for FitConfig {
             min_points: 8,
             min_length_m: 0.4,
             max_gap_m: 1.5,
+            free_standing_max_m: 0.15,
+            end_gap_m: 0.3,
+            end_growth_max: 0.5,
         }
     }
 }
@@ -209,7 +217,8 @@ impl LineFitter {
 
     /// Keeps the candidates of the heaviest run without gaps longer than
     /// `max_gap_m` along the line, less fewer than `min_points` echoes
-    /// within `BLOB_MAX_M` beyond a gap of `SPARSE_GAP_M` at either end.
+    /// within `free_standing_max_m` beyond a gap of `end_gap_m` at either
+    /// end, when they would lengthen it by more than `end_growth_max`.
     /// Returns whether anything was dropped.
     fn keep_longest_run(&mut self, pts: &[ScanPoint], line: Line) -> bool {
         let u = line.normal();
@@ -238,20 +247,21 @@ impl LineFitter {
         }
         // A few echoes close together beyond a gap at either end (a door
         // jamb's edge seen past the door) do not carry a wall on by more
-        // than half its length.
+        // than a share of its length.
         let (mut lo, mut hi) = best;
+        let c = &self.config;
         let t = |j: usize| self.along[j].0;
         let few =
-            |a: usize, b: usize| b - a < self.config.min_points && t(b - 1) - t(a) <= BLOB_MAX_M;
-        if let Some(g) = (lo + 1..hi).find(|&j| t(j) - t(j - 1) > SPARSE_GAP_M)
+            |a: usize, b: usize| b - a < c.min_points && t(b - 1) - t(a) <= c.free_standing_max_m;
+        if let Some(g) = (lo + 1..hi).find(|&j| t(j) - t(j - 1) > c.end_gap_m)
             && few(lo, g)
-            && t(g) - t(lo) > 0.5 * (t(hi - 1) - t(g))
+            && t(g) - t(lo) > c.end_growth_max * (t(hi - 1) - t(g))
         {
             lo = g;
         }
-        if let Some(g) = (lo + 1..hi).rev().find(|&j| t(j) - t(j - 1) > SPARSE_GAP_M)
+        if let Some(g) = (lo + 1..hi).rev().find(|&j| t(j) - t(j - 1) > c.end_gap_m)
             && few(g, hi)
-            && t(hi - 1) - t(g - 1) > 0.5 * (t(g - 1) - t(lo))
+            && t(hi - 1) - t(g - 1) > c.end_growth_max * (t(g - 1) - t(lo))
         {
             hi = g;
         }
@@ -328,17 +338,14 @@ impl LineFitter {
     }
 }
 
-/// Widest run of echoes taken for a thing standing free (a table's or a
-/// chair's leg, a person's), m.
-const BLOB_MAX_M: f64 = 0.15;
-
 /// Marks in `taken` the echoes of things standing free before what is
 /// behind them: runs of echoes of adjacent beams no wider than
-/// `BLOB_MAX_M`, nearer by more than three noise scales than the echoes
-/// on both sides (or with no echo on a side). No wall rests on them: a line
-/// fitted along a bed's foot and the legs of the desk beside it tilts.
-pub(crate) fn mark_free_standing(pts: &[ScanPoint], noise_sigma_m: f64, taken: &mut [bool]) {
-    let jump = 3.0 * noise_sigma_m;
+/// `config.free_standing_max_m`, nearer by more than three noise scales
+/// than the echoes on both sides (or with no echo on a side). No wall
+/// rests on them: a line fitted along a bed's foot and the legs of the
+/// desk beside it tilts.
+pub(crate) fn mark_free_standing(pts: &[ScanPoint], config: &FitConfig, taken: &mut [bool]) {
+    let jump = 3.0 * config.noise_sigma_m;
     let adjacent = |i: usize| pts[i + 1].beam == pts[i].beam + 1;
     let mut start = 0;
     while start < pts.len() {
@@ -359,7 +366,7 @@ pub(crate) fn mark_free_standing(pts: &[ScanPoint], noise_sigma_m: f64, taken: &
         let before = start > 0 && (!adjacent(start - 1) || pts[start - 1].range_m > near + jump);
         let after = end < pts.len() && (!adjacent(end - 1) || pts[end].range_m > near + jump);
         let width = (pts[end - 1].p - pts[start].p).norm();
-        if before && after && width <= BLOB_MAX_M {
+        if before && after && width <= config.free_standing_max_m {
             taken[start..end].iter_mut().for_each(|t| *t = true);
         }
         start = end;
@@ -472,7 +479,11 @@ mod tests {
             pts[k].range_m = pts[k].p.coords.norm();
         }
         let mut taken = vec![false; pts.len()];
-        mark_free_standing(&pts, 0.01, &mut taken);
+        let config = FitConfig {
+            noise_sigma_m: 0.01,
+            ..FitConfig::default()
+        };
+        mark_free_standing(&pts, &config, &mut taken);
         let marked: Vec<usize> = (0..pts.len()).filter(|&i| taken[i]).collect();
         assert_eq!(marked, [30, 31]);
     }

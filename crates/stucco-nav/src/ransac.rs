@@ -137,7 +137,7 @@ impl WallExtractor for RansacExtractor {
         let pts = points.points();
         self.taken.clear();
         self.taken.resize(pts.len(), false);
-        mark_free_standing(pts, self.config.fit.noise_sigma_m, &mut self.taken);
+        mark_free_standing(pts, &self.config.fit, &mut self.taken);
         let mut walls = Vec::new();
         let mut failures = 0;
         while walls.len() < self.config.max_walls && failures < 3 {

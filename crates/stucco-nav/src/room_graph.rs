@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use stucco_core::{Pose2, wrap_angle};
 
 use crate::error::NavError;
-use crate::wall_map::{MapWall, building};
+use crate::wall_map::{MapWall, WallRole, building};
 
 /// Share of a narrow room's width the robot must stand inside it for the
 /// room to be measured.
@@ -40,7 +40,8 @@ pub struct RoomGraphConfig {
     /// the pieces on either side of a door count together.
     pub min_wall_m: f64,
     /// Widest door, m: a room's side may be two pieces of one line this
-    /// far apart, the robot between them.
+    /// far apart, the robot between them, less what the faces standing
+    /// before the line cover of the gap (a sofa hides the wall behind it).
     pub max_door_m: f64,
     /// Pieces of wall whose lines pass this close to each other where the
     /// robot stands are one line, m.
@@ -66,13 +67,17 @@ pub struct RoomGraphConfig {
     pub same_door_m: f64,
     /// Measurements of a room's sides kept for their median.
     pub keep: usize,
+    /// The robot is in the room that holds the point this far ahead of
+    /// its pose, m: the middle of its body when the pose is its rear
+    /// axle's, a long way back when it noses into a room.
+    pub body_middle_ahead_m: f64,
 }
 
 impl Default for RoomGraphConfig {
     fn default() -> Self {
         RoomGraphConfig {
             min_wall_m: 1.1,
-            max_door_m: 2.0,
+            max_door_m: 1.4,
             same_line_m: 0.05,
             parallel_rad: 5f64.to_radians(),
             door_slack_m: 0.2,
@@ -81,6 +86,7 @@ impl Default for RoomGraphConfig {
             same_room_m: 0.1,
             same_door_m: 1.0,
             keep: 64,
+            body_middle_ahead_m: 0.0,
         }
     }
 }
@@ -336,12 +342,18 @@ impl RoomGraph {
             };
             let pieces: Vec<&MapWall> = building(walls).filter(|w| facing(w, 1.0)).collect();
             let backs: Vec<&MapWall> = building(walls).filter(|w| facing(w, -1.0)).collect();
-            let d = Self::nearest_reaching(cfg, &pieces, p)?;
+            // Faces standing before the walls (furniture marked in front
+            // of one), which hide what is behind them.
+            let screens: Vec<&MapWall> = walls
+                .iter()
+                .filter(|w| w.role != WallRole::Wall && facing(w, 1.0))
+                .collect();
+            let d = Self::nearest_reaching(cfg, &pieces, &screens, p)?;
             // A side beyond the back of a wall is the next room's: from
             // within a door's depth, or before the near face of the wall
             // it came through is mapped, the rooms on both sides would
             // make one rectangle.
-            if Self::nearest_reaching(cfg, &backs, p).is_some_and(|b| -b < d) {
+            if Self::nearest_reaching(cfg, &backs, &[], p).is_some_and(|b| -b < d) {
                 return None;
             }
             let k = side.index();
@@ -359,9 +371,11 @@ impl RoomGraph {
     /// [`MapWall::in_front`]) to the nearest of `pieces` (parallel walls on
     /// one side of `p`) that reaches past it: long enough with the pieces
     /// of its line, and covering `p`'s projection or a door facing it.
+    /// `screens` stand before the pieces and hide the gaps they cover.
     fn nearest_reaching(
         cfg: &RoomGraphConfig,
         pieces: &[&MapWall],
+        screens: &[&MapWall],
         p: &Point2<f64>,
     ) -> Option<f64> {
         let same_line = |a: &MapWall, b: &MapWall| {
@@ -371,13 +385,41 @@ impl RoomGraph {
         let gap = |a: &MapWall, b: &MapWall| {
             (a.extent_m[0] - b.extent_m[1]).max(b.extent_m[0] - a.extent_m[1])
         };
+        // The longest stretch of that gap that no screen nearer `p` than
+        // the line covers, m.
+        let open_gap = |a: &MapWall, b: &MapWall| {
+            let (lo, hi) = if a.extent_m[1] <= b.extent_m[0] {
+                (a.extent_m[1], b.extent_m[0])
+            } else {
+                (b.extent_m[1], a.extent_m[0])
+            };
+            if hi <= lo {
+                return gap(a, b);
+            }
+            let mut cover: Vec<(f64, f64)> = screens
+                .iter()
+                .filter(|s| s.in_front(p) < a.in_front(p))
+                .map(|s| {
+                    let [u, v] = s.ends().map(|e| a.along(&e));
+                    (u.min(v), u.max(v))
+                })
+                .filter(|&(u, v)| v > lo && u < hi)
+                .collect();
+            cover.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let (mut longest, mut from) = (0.0f64, lo);
+            for (u, v) in cover {
+                longest = longest.max(u - from);
+                from = from.max(v);
+            }
+            longest.max(hi - from)
+        };
         let reaches = |w: &MapWall| {
             let t = w.along(p);
             // The pieces of its line this piece is one wall with, across
             // doors.
             let partners: Vec<&&MapWall> = pieces
                 .iter()
-                .filter(|o| same_line(w, o) && gap(w, o) <= cfg.max_door_m)
+                .filter(|o| same_line(w, o) && open_gap(w, o) <= cfg.max_door_m)
                 .collect();
             let long =
                 w.length_m() + partners.iter().map(|o| o.length_m()).sum::<f64>() >= cfg.min_wall_m;
@@ -418,6 +460,7 @@ impl RoomGraph {
     /// Takes the robot's pose and the map's walls as they are after a scan
     /// ([`crate::WallMapEkf::walls`]: read in place, not copied).
     pub fn update(&mut self, pose: &Pose2, walls: &[MapWall]) -> Option<RoomEvent> {
+        let pose = &(*pose * Pose2::new(self.config.body_middle_ahead_m, 0.0, 0.0));
         if self.current.is_none() {
             // The frame is fixed once the first room is found: rooms are
             // compared in it.
@@ -891,6 +934,41 @@ mod tests {
             rect.iter().zip(truth).all(|(a, b)| (a - b).abs() < 1e-9),
             "{rect:?}"
         );
+    }
+
+    #[test]
+    fn a_wall_hidden_behind_a_sofa_still_bounds_its_room() {
+        // The living room [0, 5] × [0, 2.85]: of its west wall only the
+        // ends are mapped, 1.6 m apart; the sofa's face stands 0.9 m
+        // before it across that gap.
+        let mut walls = vec![
+            face(0, (0.0, 0.0), (5.0, 0.0)),
+            face(1, (5.0, 0.0), (5.0, 2.85)),
+            face(2, (5.0, 2.85), (0.0, 2.85)),
+            face(3, (0.0, 2.85), (0.0, 2.1)),
+            face(4, (0.0, 0.5), (0.0, 0.0)),
+        ];
+        let mut sofa = face(5, (0.9, 2.2), (0.9, 0.4));
+        sofa.role = WallRole::InFront;
+        walls.push(sofa);
+        let at = Point2::new(2.5, 1.4);
+        let mut graph = RoomGraph::new(RoomGraphConfig::default());
+        graph.update(&Pose2::new(at.x, at.y, 0.0), &walls);
+        let rect = graph.rectangle(&walls, &at).unwrap();
+        let truth = [0.0, 5.0, 0.0, 2.85];
+        assert!(
+            rect.iter().zip(truth).all(|(a, b)| (a - b).abs() < 1e-9),
+            "{rect:?}"
+        );
+        // Without the sofa the gap is wider than a door: the two short
+        // pieces are no side.
+        walls.pop();
+        assert_eq!(graph.rectangle(&walls, &at), None);
+        // Nor does a face behind the wall's line hide its gap.
+        let mut beyond = face(5, (-0.9, 2.2), (-0.9, 0.4));
+        beyond.role = WallRole::InFront;
+        walls.push(beyond);
+        assert_eq!(graph.rectangle(&walls, &at), None);
     }
 
     #[test]

@@ -197,7 +197,7 @@ impl WallExtractor for RwhtExtractor {
         self.segments
             .retain(|s| (s.first..s.end).all(|i| !taken[i]));
         // What stands free votes in no run; no wall takes it either.
-        mark_free_standing(pts, self.config.fit.noise_sigma_m, &mut self.taken);
+        mark_free_standing(pts, &self.config.fit, &mut self.taken);
         self.spent.clear();
         self.spent.resize(self.segments.len(), false);
         let threshold = self.threshold(points.angle_increment_rad());
