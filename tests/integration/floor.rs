@@ -7,6 +7,7 @@
 //! lies along no surface, and the room graph against the rooms and doors
 //! driven through.
 
+use rayon::prelude::*;
 use std::path::PathBuf;
 use stucco_cli::{FloorRun, map_floor};
 use stucco_sim::WorldSpec;
@@ -16,14 +17,17 @@ fn world(file: &str) -> WorldSpec {
     WorldSpec::load(&path).unwrap()
 }
 
-/// Maps `file` along its tour `tour` for `seconds` on seeds `first..first
-/// + 20`, from 0.5 to 1.0 m/s, and asserts issue 5's figures.
-fn map_twenty(file: &str, tour: &str, first: u64, seconds: f64) {
+/// Maps `file` along its tour `tour` for `seconds` on `seeds` seeds from
+/// `first`, their speeds spread from 0.5 to 1.0 m/s, and asserts issue 5's
+/// figures: the walls within 1 cm / 0.3° RMS, none along no surface, and
+/// the room graph right in 19 runs of 20.
+fn map_seeds(file: &str, tour: &str, first: u64, seeds: u64, seconds: f64) {
     let world = world(file);
     let tour = world.tour_named(tour).unwrap();
-    let runs: Vec<FloorRun> = (0..20u64)
+    let runs: Vec<FloorRun> = (0..seeds)
+        .into_par_iter()
         .map(|k| {
-            let speed = 0.5 + 0.5 * k as f64 / 19.0;
+            let speed = 0.5 + 0.5 * k as f64 / (seeds - 1).max(1) as f64;
             map_floor(&world, &tour, first + k, speed, seconds).unwrap()
         })
         .collect();
@@ -59,22 +63,43 @@ fn map_twenty(file: &str, tour: &str, first: u64, seconds: f64) {
     };
     let (dist, angle) = (rms(|r| r.wall_dist_rms_m), rms(|r| r.wall_angle_rms_rad));
     eprintln!(
-        "all seeds: {n} walls, {:.1} mm / {:.3}° RMS; graphs right {correct} of 20",
+        "all seeds: {n} walls, {:.1} mm / {:.3}° RMS; graphs right {correct} of {seeds}; {} runs with a wall along no surface",
         dist * 1e3,
-        angle.to_degrees()
+        angle.to_degrees(),
+        runs.iter().filter(|r| r.stray_walls > 0).count()
     );
     assert!(dist <= 0.01, "{dist}");
     assert!(angle <= 0.3f64.to_radians(), "{angle}");
-    assert!(runs.iter().all(|r| r.stray_walls == 0));
-    assert!(correct >= 19, "{correct} of 20");
+    let stray: Vec<u64> = runs
+        .iter()
+        .filter(|r| r.stray_walls > 0)
+        .map(|r| r.seed)
+        .collect();
+    assert!(
+        stray.is_empty(),
+        "walls along no surface on seeds {stray:?}"
+    );
+    assert!(20 * correct >= 19 * seeds as usize, "{correct} of {seeds}");
 }
 
 #[test]
 fn a_floor_is_mapped_with_its_rooms_and_doors() {
-    map_twenty("floor.toml", "tour", 100, 200.0);
+    map_seeds("floor.toml", "tour", 100, 20, 200.0);
 }
 
 #[test]
 fn the_apartment_is_mapped_through_its_hall() {
-    map_twenty("apartment.toml", "through-the-hall", 200, 120.0);
+    map_seeds("apartment.toml", "through-the-hall", 200, 20, 120.0);
+}
+
+/// Both floors on 100 seeds the default run's tests were never tuned on
+/// (1000–1099): whether their figures hold beyond the 20 seeds each. They
+/// do not yet: on seeds 1079 and 1086 the apartment's map keeps one wall
+/// along no surface, a line across the bedroom desk's legs and the bed's
+/// foot, 2.5° askew, founded from 4 sightings.
+#[test]
+#[ignore = "study: 200 floor runs; run with --release -- --ignored --nocapture"]
+fn both_floors_hold_on_a_hundred_fresh_seeds() {
+    map_seeds("floor.toml", "tour", 1000, 100, 200.0);
+    map_seeds("apartment.toml", "through-the-hall", 1000, 100, 120.0);
 }
