@@ -290,12 +290,20 @@ impl WorldSpec {
                 message: e.message().to_owned(),
             }
         })?;
-        world.check().map_err(|(field, reason)| SimError::Invalid {
-            origin: origin.to_owned(),
-            line: find_line(text, &field),
-            field,
-            reason,
-        })?;
+        // TOML reads `nan` and `inf`: no length, place or speed is one.
+        let non_finite = text
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|t| first_non_finite(&t, ""))
+            .map(|field| (field, "numbers must be finite".to_owned()));
+        non_finite
+            .map_or_else(|| world.check(), Err)
+            .map_err(|(field, reason)| SimError::Invalid {
+                origin: origin.to_owned(),
+                line: find_line(text, &field),
+                field,
+                reason,
+            })?;
         Ok(world)
     }
 
@@ -369,17 +377,7 @@ impl WorldSpec {
                 );
             }
         }
-        let finite = |points: &[[f64; 2]]| points.iter().flatten().all(|c| c.is_finite());
-        if !finite(&self.tour) {
-            return bad("tour".into(), "a tour's points must be finite numbers");
-        }
         for (name, t) in &self.tours {
-            if !finite(&t.points) {
-                return bad(
-                    format!("tours.{name}.points"),
-                    "a tour's points must be finite numbers",
-                );
-            }
             if t.points.len() < 2 {
                 return bad(
                     format!("tours.{name}.points"),
@@ -402,6 +400,32 @@ impl WorldSpec {
             return Some(TourSpec::forwards(self.tour.clone()));
         }
         self.tours.get(name).cloned()
+    }
+}
+
+/// The field of a number in `table` that is not finite, named as
+/// [`WorldSpec::check`] names fields (`room[2].corners`,
+/// `tours.hall.points`, `tour`).
+fn first_non_finite(table: &toml::Table, prefix: &str) -> Option<String> {
+    table.iter().find_map(|(key, value)| {
+        let field = if prefix.is_empty() {
+            key.clone()
+        } else {
+            format!("{prefix}.{key}")
+        };
+        non_finite_in(value, &field)
+    })
+}
+
+fn non_finite_in(value: &toml::Value, field: &str) -> Option<String> {
+    match value {
+        toml::Value::Float(x) if !x.is_finite() => Some(field.to_owned()),
+        toml::Value::Table(t) => first_non_finite(t, field),
+        toml::Value::Array(items) => items.iter().enumerate().find_map(|(i, v)| match v {
+            toml::Value::Table(t) => first_non_finite(t, &format!("{field}[{i}]")),
+            v => non_finite_in(v, field),
+        }),
+        _ => None,
     }
 }
 
@@ -526,7 +550,7 @@ width_m = 0.9
     }
 
     #[test]
-    fn a_tour_through_a_point_that_is_no_number_is_refused_at_its_line() {
+    fn a_number_that_is_no_number_is_refused_at_its_line() {
         let text = ROOM.replace(
             "tour = [[1.0, 1.0], [3.0, 1.0]]",
             "tour = [[1.0, 1.0], [nan, 1.0]]",
@@ -542,6 +566,23 @@ width_m = 0.9
         let line = text.lines().position(|l| l == "[tours.back]").unwrap() + 1;
         assert!(
             err.contains(&format!("box.toml:{line}")) && err.contains("tours.back.points"),
+            "{err}"
+        );
+        // Not only tours: a room's corner, a door's place.
+        let line_of =
+            |text: &str, header: &str| text.lines().position(|l| l == header).unwrap() + 1;
+        let text = ROOM.replace("[4.0, 3.0], [0.0, 3.0]]", "[4.0, nan], [0.0, 3.0]]");
+        let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
+        assert!(
+            err.contains(&format!("box.toml:{}", line_of(&text, "[[room]]")))
+                && err.contains("room[0].corners"),
+            "{err}"
+        );
+        let text = ROOM.replace("offset_m = 1.0", "offset_m = nan");
+        let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
+        assert!(
+            err.contains(&format!("box.toml:{}", line_of(&text, "[[door]]")))
+                && err.contains("door[0].offset_m"),
             "{err}"
         );
     }
