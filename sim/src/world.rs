@@ -291,19 +291,20 @@ impl WorldSpec {
             }
         })?;
         // TOML reads `nan` and `inf`: no length, place or speed is one.
-        let non_finite = text
-            .parse::<toml::Table>()
-            .ok()
-            .and_then(|t| first_non_finite(&t, ""))
-            .map(|field| (field, "numbers must be finite".to_owned()));
-        non_finite
-            .map_or_else(|| world.check(), Err)
-            .map_err(|(field, reason)| SimError::Invalid {
+        if let Some(bad) = stucco_core::first_non_finite(text) {
+            return Err(SimError::Invalid {
                 origin: origin.to_owned(),
-                line: find_line(text, &field),
-                field,
-                reason,
-            })?;
+                line: bad.line,
+                field: bad.field,
+                reason: "numbers must be finite".to_owned(),
+            });
+        }
+        world.check().map_err(|(field, reason)| SimError::Invalid {
+            origin: origin.to_owned(),
+            line: find_line(text, &field),
+            field,
+            reason,
+        })?;
         Ok(world)
     }
 
@@ -400,32 +401,6 @@ impl WorldSpec {
             return Some(TourSpec::forwards(self.tour.clone()));
         }
         self.tours.get(name).cloned()
-    }
-}
-
-/// The field of a number in `table` that is not finite, named as
-/// [`WorldSpec::check`] names fields (`room[2].corners`,
-/// `tours.hall.points`, `tour`).
-fn first_non_finite(table: &toml::Table, prefix: &str) -> Option<String> {
-    table.iter().find_map(|(key, value)| {
-        let field = if prefix.is_empty() {
-            key.clone()
-        } else {
-            format!("{prefix}.{key}")
-        };
-        non_finite_in(value, &field)
-    })
-}
-
-fn non_finite_in(value: &toml::Value, field: &str) -> Option<String> {
-    match value {
-        toml::Value::Float(x) if !x.is_finite() => Some(field.to_owned()),
-        toml::Value::Table(t) => first_non_finite(t, field),
-        toml::Value::Array(items) => items.iter().enumerate().find_map(|(i, v)| match v {
-            toml::Value::Table(t) => first_non_finite(t, &format!("{field}[{i}]")),
-            v => non_finite_in(v, field),
-        }),
-        _ => None,
     }
 }
 
@@ -563,25 +538,34 @@ width_m = 0.9
         );
         let text = format!("{ROOM}\n[tours.back]\npoints = [[1.0, 1.0], [3.0, inf]]\n");
         let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
-        let line = text.lines().position(|l| l == "[tours.back]").unwrap() + 1;
+        let line = text
+            .lines()
+            .position(|l| l.starts_with("points ="))
+            .unwrap()
+            + 1;
         assert!(
             err.contains(&format!("box.toml:{line}")) && err.contains("tours.back.points"),
             "{err}"
         );
-        // Not only tours: a room's corner, a door's place.
-        let line_of =
-            |text: &str, header: &str| text.lines().position(|l| l == header).unwrap() + 1;
+        // Not only tours: a room's corner, a door's place, each at its
+        // number's own line.
+        let line_of = |text: &str, key: &str| {
+            text.lines()
+                .position(|l| l.contains(key) && l.contains("nan"))
+                .unwrap()
+                + 1
+        };
         let text = ROOM.replace("[4.0, 3.0], [0.0, 3.0]]", "[4.0, nan], [0.0, 3.0]]");
         let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
         assert!(
-            err.contains(&format!("box.toml:{}", line_of(&text, "[[room]]")))
+            err.contains(&format!("box.toml:{}", line_of(&text, "corners")))
                 && err.contains("room[0].corners"),
             "{err}"
         );
         let text = ROOM.replace("offset_m = 1.0", "offset_m = nan");
         let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
         assert!(
-            err.contains(&format!("box.toml:{}", line_of(&text, "[[door]]")))
+            err.contains(&format!("box.toml:{}", line_of(&text, "offset_m")))
                 && err.contains("door[0].offset_m"),
             "{err}"
         );

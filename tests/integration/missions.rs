@@ -283,6 +283,16 @@ fn a_bad_floor_plan_names_file_line_and_field() {
         err.contains("plan.toml:6") && err.contains("room_m"),
         "{err}"
     );
+    // A door at a place that is no number (TOML reads nan; no range
+    // check sees it): its own line and field.
+    let text = format!("{head}{door}{task}").replace("[2.5, 3.075]", "[nan, 3.075]");
+    let line = text.lines().position(|l| l.contains("nan")).unwrap() + 1;
+    let err = load(text);
+    assert!(
+        err.contains(&format!("plan.toml:{line}:"))
+            && err.contains("`door[0].at_m`: numbers must be finite"),
+        "{err}"
+    );
     // Written right, it loads.
     std::fs::write(&path, format!("{head}{door}{task}")).unwrap();
     let m = stucco_cli::Mission::load(&path).unwrap();

@@ -572,7 +572,7 @@ fn run_study_command(job: StudyJob, json: bool) -> ExitCode {
         report.study,
         report.laser,
         report.world,
-        report.extractor.name(),
+        report.extractor,
         report.seeds,
         report.seconds,
         report.rpe_pair_m,

@@ -545,9 +545,10 @@ fn line_of_array(text: &str, table: &str, n: usize, key: &str) -> usize {
 /// `text` (the file at `path`) read as a `T`; a fault is [`BadInput`]
 /// naming `PATH:LINE:COL`, the key written there when the fault is in its
 /// value (toml's message gives only the type it expected), and what was
-/// expected.
+/// expected. TOML reads `nan` and `inf`; no number in these files may be
+/// one (every range check compares false with `nan`).
 pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
-    toml::from_str(text).map_err(|e| {
+    let parsed = toml::from_str(text).map_err(|e| {
         let (line, column) = e
             .span()
             .map(|s| stucco_core::line_column(text, s.start))
@@ -564,8 +565,18 @@ pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path
             Some(k) => format!("{at}: `{k}`: {}", e.message()),
             None => format!("{at}: {}", e.message()),
         })
-        .into()
-    })
+    })?;
+    match stucco_core::first_non_finite(text) {
+        Some(bad) => Err(BadInput(format!(
+            "{}:{}:{}: `{}`: numbers must be finite",
+            path.display(),
+            bad.line,
+            bad.column,
+            bad.field
+        ))
+        .into()),
+        None => Ok(parsed),
+    }
 }
 
 /// The line of `key` in `table` (`""`: the top level; its sub-tables count

@@ -961,6 +961,17 @@ mod tests {
             e.starts_with("s.toml:7:") && e.contains("`hough`") && e.contains("`ransac`"),
             "{e}"
         );
+        // TOML reads nan, and `nan <= 0` is false: no range check sees it.
+        let e = refused(&text("").replace("seconds = 20.0", "seconds = nan"));
+        assert!(
+            e.starts_with("s.toml:5:11:") && e.contains("`seconds`") && e.contains("finite"),
+            "{e}"
+        );
+        let e = refused(&text("noise_m = [0.0, inf]"));
+        assert!(
+            e.starts_with("s.toml:10:") && e.contains("`defeature.noise_m`"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -27,12 +27,14 @@ pub enum ExtractorKind {
     Ransac,
 }
 
-impl ExtractorKind {
-    /// Its name, as files and the command line spell it.
-    pub fn name(self) -> &'static str {
-        match self {
-            ExtractorKind::Rwht => "rwht",
-            ExtractorKind::Ransac => "ransac",
+impl std::fmt::Display for ExtractorKind {
+    /// Its name as files and the command line spell it (clap's, which
+    /// serde's `lowercase` agrees with).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use clap::ValueEnum;
+        match self.to_possible_value() {
+            Some(v) => f.write_str(v.get_name()),
+            None => Ok(()),
         }
     }
 }
@@ -362,4 +364,22 @@ fn draw_map(
         }],
         &marks,
     )
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_extractor_is_spelt_one_way_in_files_and_on_the_command_line() {
+        for kind in [ExtractorKind::Rwht, ExtractorKind::Ransac] {
+            let name = kind.to_string();
+            let json = serde_json::to_string(&kind).unwrap();
+            assert_eq!(json, format!("\"{name}\""));
+            assert_eq!(serde_json::from_str::<ExtractorKind>(&json).unwrap(), kind);
+            let parsed = <ExtractorKind as clap::ValueEnum>::from_str(&name, false).unwrap();
+            assert_eq!(parsed, kind);
+        }
+    }
 }

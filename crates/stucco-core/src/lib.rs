@@ -49,7 +49,7 @@ pub use spray::{
     path_density,
 };
 pub use stamp::{ParseStampError, Stamp};
-pub use text::line_column;
+pub use text::{NonFinite, first_non_finite, line_column};
 pub use vehicle::VehicleSpec;
 
 /// Re-export of the linear-algebra crate the public API uses.
