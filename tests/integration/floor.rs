@@ -93,10 +93,7 @@ fn the_apartment_is_mapped_through_its_hall() {
 }
 
 /// Both floors on 100 seeds the default run's tests were never tuned on
-/// (1000–1099): whether their figures hold beyond the 20 seeds each. They
-/// do not yet: on seeds 1079 and 1086 the apartment's map keeps one wall
-/// along no surface, a line across the bedroom desk's legs and the bed's
-/// foot, 2.5° askew, founded from 4 sightings.
+/// (1000–1099): whether their figures hold beyond the 20 seeds each.
 #[test]
 #[ignore = "study: 200 floor runs; run with --release -- --ignored --nocapture"]
 fn both_floors_hold_on_a_hundred_fresh_seeds() {

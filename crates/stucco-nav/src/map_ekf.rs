@@ -36,6 +36,12 @@ use crate::wall_map::{MapWall, WallId, WallMap, WallRole};
 /// fit across that wall and what stands before it, rad (beyond, it may be
 /// another wall meeting it).
 const ASKEW_MAX_RAD: f64 = 0.2;
+/// Narrowest angle at which such a line is askew, rad: a face before a
+/// wall is parallel to it, and a fitted line's angle strays by a few
+/// tenths of a degree (1.5° is three times the least σ of a sighting's).
+/// Lines fitted across a wall and the radiator before it, or a bed's foot
+/// and the legs beside it, lie 2–3° askew.
+const ASKEW_MIN_RAD: f64 = 0.026;
 /// How far beyond the shallowest face before a wall such a line's ends
 /// may lie from the wall, m.
 const ASKEW_BAND_M: f64 = 0.15;
@@ -708,17 +714,23 @@ impl WallMapEkf {
     /// angle `alpha`, lies along a map wall's stretch, close to it, but at
     /// an angle no face before a wall stands at: walls that meet do so at
     /// their ends, and what stands before a wall (a radiator, a cabinet) is
-    /// parallel to it. Such a line, when shorter than the wall, is a fit
-    /// across two surfaces (a wall and the radiator before it, seen far
-    /// off at a grazing angle through a door) and founds nothing until it
-    /// is seen more often than the wall: returns the most observations of
-    /// such a wall. A longer line is the wall the map holds a fit across,
-    /// and founds it (the fit is then marked, [`WallMapEkf::mark_askew`]).
+    /// parallel to it. One of the two is a fit across two surfaces, and
+    /// the one seen more often is taken for the surface. Such a line
+    /// founds nothing until it is seen more often than the map's walls it
+    /// lies askew along: returns the most observations of such a wall.
+    /// Shorter, it is a fit across a wall and the radiator before it, seen
+    /// far off through a door. Longer, it is either the wall the map holds
+    /// a fit across (a shut door's leaf and its wall fitted as one from
+    /// afar, founded before the wall was seen near, and seldom seen again:
+    /// the wall soon outnumbers it and the fit is marked,
+    /// [`WallMapEkf::mark_askew`]), or a fit across a face the map holds
+    /// and what lies beyond it (a radiator and the wall past its end, a
+    /// bed's foot and the legs of the desk beside it), which the face,
+    /// seen from everywhere in the room, outnumbers.
     fn askew_rival(&self, alpha: f64, ends: &[Point2<f64>; 2]) -> Option<u32> {
-        let length = (ends[1] - ends[0]).norm();
         self.walls
             .iter()
-            .filter(|w| w.length_m() >= length && askew_along(&self.config, alpha, ends, w))
+            .filter(|w| askew_along(&self.config, alpha, ends, w))
             .map(|w| w.observations)
             .max()
     }
@@ -855,7 +867,7 @@ impl WallMapEkf {
 /// no face before a wall stands at (see [`WallMapEkf::askew_rival`]).
 fn askew_along(cfg: &WallMapConfig, alpha: f64, ends: &[Point2<f64>; 2], wall: &MapWall) -> bool {
     let angle = wrap_angle(alpha - wall.alpha_rad).abs();
-    if angle < cfg.parallel_rad || angle > ASKEW_MAX_RAD {
+    if !(ASKEW_MIN_RAD..=ASKEW_MAX_RAD).contains(&angle) {
         return false;
     }
     let near = ends
