@@ -549,25 +549,21 @@ width_m = 0.9
         );
         // Not only tours: a room's corner, a door's place, each at its
         // number's own line.
-        let line_of = |text: &str, key: &str| {
-            text.lines()
-                .position(|l| l.contains(key) && l.contains("nan"))
-                .unwrap()
-                + 1
-        };
-        let text = ROOM.replace("[4.0, 3.0], [0.0, 3.0]]", "[4.0, nan], [0.0, 3.0]]");
-        let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
-        assert!(
-            err.contains(&format!("box.toml:{}", line_of(&text, "corners")))
-                && err.contains("room[0].corners"),
-            "{err}"
-        );
-        let text = ROOM.replace("offset_m = 1.0", "offset_m = nan");
-        let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
-        assert!(
-            err.contains(&format!("box.toml:{}", line_of(&text, "offset_m")))
-                && err.contains("door[0].offset_m"),
-            "{err}"
-        );
+        for (from, to, field) in [
+            (
+                "[4.0, 3.0], [0.0, 3.0]]",
+                "[4.0, nan], [0.0, 3.0]]",
+                "room[0].corners",
+            ),
+            ("offset_m = 1.0", "offset_m = nan", "door[0].offset_m"),
+        ] {
+            let text = ROOM.replace(from, to);
+            let line = text.lines().position(|l| l.contains("nan")).unwrap() + 1;
+            let err = WorldSpec::parse(&text, "box.toml").unwrap_err().to_string();
+            assert!(
+                err.contains(&format!("box.toml:{line}")) && err.contains(field),
+                "{err}"
+            );
+        }
     }
 }

@@ -266,11 +266,21 @@ struct RoomStudy {
     all_in_view_found: usize,
     /// Walls reported where the true wall was in view but elsewhere.
     wrong_walls: usize,
-    err_d: Vec<f64>,
-    err_g: Vec<f64>,
     /// Each pose's walls in turn: the distance and angle errors of the
     /// one found, if it was.
     per_wall: Vec<Option<(f64, f64)>>,
+}
+
+impl RoomStudy {
+    /// The distance errors of the walls found, m.
+    fn err_d(&self) -> Vec<f64> {
+        self.per_wall.iter().flatten().map(|e| e.0).collect()
+    }
+
+    /// The angle errors of the walls found, rad.
+    fn err_g(&self) -> Vec<f64> {
+        self.per_wall.iter().flatten().map(|e| e.1).collect()
+    }
 }
 
 /// The walls the room search finds, as one extractor.
@@ -336,11 +346,7 @@ fn reference_room_study(
             study
                 .per_wall
                 .push(m.map(|m| (m.d_m - d, wrap_angle(m.gamma_rad - g))));
-            if let Some(m) = m {
-                found += 1;
-                study.err_d.push(m.d_m - d);
-                study.err_g.push(wrap_angle(m.gamma_rad - g));
-            }
+            found += usize::from(m.is_some());
             if beams >= IN_VIEW_BEAMS {
                 in_view += 1;
                 found_in_view += usize::from(m.is_some());
@@ -374,7 +380,7 @@ fn robust_spread(v: &[f64]) -> f64 {
 }
 
 fn report_room_study(s: &RoomStudy) -> (f64, f64) {
-    let (sd, sg) = (std_dev(&s.err_d), std_dev(&s.err_g).to_degrees());
+    let (sd, sg) = (std_dev(&s.err_d()), std_dev(&s.err_g()).to_degrees());
     println!(
         "{} poses: every wall in view (>= {IN_VIEW_BEAMS} beams) found in {} ({:.2}%), a wrong wall reported {} times; \
          all four walls in view in {}, all four found in {}; σ_d {:.2} mm, σ_γ {:.3}° over {} walls",
@@ -386,7 +392,7 @@ fn report_room_study(s: &RoomStudy) -> (f64, f64) {
         s.all_four,
         sd * 1e3,
         sg,
-        s.err_d.len()
+        s.err_d().len()
     );
     (sd, sg)
 }
@@ -436,7 +442,7 @@ fn rwht_against_ransac(poses: usize, seed: u64) {
     report_room_study(&a);
     print!("RANSAC: ");
     report_room_study(&b);
-    let robust = |s: &RoomStudy| (robust_spread(&s.err_d), robust_spread(&s.err_g));
+    let robust = |s: &RoomStudy| (robust_spread(&s.err_d()), robust_spread(&s.err_g()));
     let ((ad, ag), (bd, bg)) = (robust(&a), robust(&b));
     println!(
         "robust σ over each one's finds: RWHT {:.2} mm {:.3}°, RANSAC {:.2} mm {:.3}°",
