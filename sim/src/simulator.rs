@@ -55,8 +55,30 @@ impl Default for SimConfig {
     }
 }
 
-/// Mixed into the run's seed for the tool camera's noise.
-const TOOL_CAMERA_SEED: u64 = 0x7001_ca3e_7a00_0001;
+/// The run's random streams, one per source of noise: what one source
+/// draws leaves every other's draws as they were, so carrying another
+/// laser (or a camera) drives the same drive, slip for slip.
+#[derive(Clone, Copy)]
+#[repr(u64)]
+enum Stream {
+    /// The people's walks and the drive's slip and creep.
+    World = 0,
+    /// The laser's range noise and faults.
+    Laser = 1,
+    /// The fixed camera's noise.
+    Camera = 2,
+    /// The sprayer carriage's camera's noise.
+    ToolCamera = 3,
+}
+
+impl Stream {
+    /// This stream of the run seeded `seed`.
+    fn of(self, seed: u64) -> ChaCha8Rng {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(self as u64);
+        rng
+    }
+}
 
 /// The truth about the robot, for tests and reports only.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -77,11 +99,12 @@ pub struct Simulator {
     scene: Scene,
     drive: Drive,
     laser: LaserRig,
-    camera: Option<CameraRig>,
-    /// The camera on the sprayer's carriage, with its own noise (so that
-    /// carrying it leaves every other sensor's draws as they were).
+    laser_rng: ChaCha8Rng,
+    camera: Option<(CameraRig, ChaCha8Rng)>,
+    /// The camera on the sprayer's carriage.
     tool_camera: Option<(CameraRig, ChaCha8Rng)>,
     faults: FaultConfig,
+    /// The world's noise: the people's walks, the drive's slip and creep.
     rng: ChaCha8Rng,
     step_ns: i64,
     now_ns: i64,
@@ -101,7 +124,7 @@ impl Simulator {
     /// A simulation of `world` with `config`; `seed` overrides the world's.
     pub fn new(world: &WorldSpec, config: SimConfig, seed: Option<u64>) -> Simulator {
         let seed = seed.unwrap_or(world.seed);
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut rng = Stream::World.of(seed);
         let layout = Layout::of(world);
         let start = Pose2::new(
             world.robot.at[0],
@@ -116,17 +139,16 @@ impl Simulator {
                 config.vehicle.laser_mount,
                 PlaneCaster::new(&layout, config.vehicle.laser_height_m),
             ),
-            camera: config.camera.clone().map(CameraRig::new),
+            laser_rng: Stream::Laser.of(seed),
+            camera: config
+                .camera
+                .clone()
+                .map(|c| (CameraRig::new(c), Stream::Camera.of(seed))),
             tool_camera: config
                 .sprayer
                 .as_ref()
                 .and_then(|s| s.camera.clone())
-                .map(|c| {
-                    (
-                        CameraRig::new(c),
-                        ChaCha8Rng::seed_from_u64(seed ^ TOOL_CAMERA_SEED),
-                    )
-                }),
+                .map(|c| (CameraRig::new(c), Stream::ToolCamera.of(seed))),
             drive: Drive::new(config.vehicle.clone(), config.dynamics.clone(), start),
             faults: config.faults,
             scene,
@@ -220,15 +242,15 @@ impl Simulator {
             &before,
             &twist,
             &self.faults,
-            &mut self.rng,
+            &mut self.laser_rng,
         ) {
             let due = scan.stamp.as_nanos() + (self.faults.scan_delay_s * 1e9).round() as i64;
             self.delayed.push_back((due, scan));
         }
-        if let Some(cam) = &mut self.camera {
+        if let Some((cam, rng)) = &mut self.camera {
             let origin = [0.0, 0.0, cam.spec().height_m];
             out.profiles
-                .extend(cam.shoot(&self.scene, t1, &pose, origin, &mut self.rng));
+                .extend(cam.shoot(&self.scene, t1, &pose, origin, rng));
         }
         if let (Some((cam, rng)), Some(d)) = (&mut self.tool_camera, &self.deposition) {
             let origin = d.state().nozzle_m;

@@ -60,6 +60,47 @@ fn simulations_run_in_parallel_threads_alike() {
     assert_eq!(here, there);
 }
 
+/// The sensor study compares lasers as the paper's robot did, all riding
+/// one drive: the laser and camera carried draw their noise from streams
+/// of their own, so the wheels slip and creep alike whatever is on board.
+#[test]
+fn another_laser_or_no_camera_on_board_drives_the_same_drive() {
+    let w = world("apartment");
+    let dynamics = stucco_sim::DynamicsConfig {
+        drive_slip: 0.03,
+        creep_sigma: 0.01,
+        slip_burst_rate_hz: 0.5,
+        slip_burst_s: 0.3,
+        slip_burst_loss: 0.3,
+        ..Default::default()
+    };
+    let drive_of = |config: SimConfig| {
+        let mut sim = Simulator::new(&w, config, Some(11));
+        let (mut encoders, mut poses, mut scans) = (Vec::new(), Vec::new(), Vec::new());
+        tour(&mut sim, &w, 20.0, |r, pose| {
+            encoders.extend(r.encoders.iter().map(|e| format!("{e:?}")));
+            poses.push(*pose);
+            scans.extend(r.scans.iter().map(|s| s.ranges_m.len()));
+        });
+        (encoders, poses, scans)
+    };
+    let urg = drive_of(SimConfig {
+        laser: stucco_core::LaserSpec::hokuyo_urg(),
+        dynamics: dynamics.clone(),
+        ..SimConfig::default()
+    });
+    let utm = drive_of(SimConfig {
+        laser: stucco_core::LaserSpec::hokuyo_utm30(),
+        camera: None,
+        dynamics,
+        ..SimConfig::default()
+    });
+    assert!(urg.0.len() > 100, "{} encoder samples", urg.0.len());
+    assert_eq!(urg.0, utm.0, "the encoders must count alike");
+    assert_eq!(urg.1, utm.1, "the robot must go where it went");
+    assert_ne!(urg.2, utm.2, "the two lasers must scan differently");
+}
+
 #[test]
 fn a_wall_stops_the_robot_and_the_bumper_says_so() {
     let w = world("reference-room");

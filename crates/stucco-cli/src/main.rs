@@ -581,6 +581,9 @@ fn run_study_command(job: StudyJob, json: bool) -> ExitCode {
         report.wall_seconds
     );
     let table = |title: &str, rows: &[stucco_cli::SettingReport]| {
+        if rows.is_empty() {
+            return;
+        }
         println!(
             "{title:<14} {:>20} {:>22} {:>18} {:>9}",
             "trans m (mean ± std)", "rot rad (mean ± std)", "odometry m / rad", "map σ mm"
@@ -603,6 +606,25 @@ fn run_study_command(job: StudyJob, json: bool) -> ExitCode {
         table(axis.name(), report.axis(axis));
     }
     table("scanner", &report.scanners);
+    if !report.scanner_differences.is_empty() {
+        println!(
+            "{:<30} {:>22} {:>22}",
+            "drive by drive (mean ± s.e.)", "trans m", "rot rad"
+        );
+        let se = |s: Option<f64>, digits: usize| {
+            s.map_or_else(|| "—".to_owned(), |s| format!("{s:.digits$}"))
+        };
+        for d in &report.scanner_differences {
+            println!(
+                "{:<30} {:>+10.5} ± {:<9} {:>+10.5} ± {:<9}",
+                format!("{} − {}", d.a, d.b),
+                d.trans_m.mean,
+                se(d.trans_m.se, 5),
+                d.rot_rad.mean,
+                se(d.rot_rad.se, 5),
+            );
+        }
+    }
     if let Some(dir) = &job.out {
         println!(
             "wrote {0}/{{range,resolution,fov,noise,scanners}}.csv, {0}/*.svg, {0}/*.png and {0}/study.json",

@@ -12,8 +12,10 @@
 //! decision-directed association) starting from nothing. The relative pose
 //! error against the true trajectory and the error of the map's walls
 //! against the true walls score each setting over the seeds. The three
-//! scanners of the paper are compared on the same drive, each on its own
-//! recorded run.
+//! scanners of the paper are compared as the paper's robot carried them:
+//! seed by seed, each laser rides the same drive (the simulator draws the
+//! wheels' slip apart from the laser's noise), so two scanners are
+//! compared drive by drive ([`ScannerDifference`]).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -314,6 +316,95 @@ pub struct SettingReport {
     pub map_dist_rms_m: f64,
     /// RMS angle between the scored walls and their true walls, rad.
     pub map_angle_rms_rad: f64,
+    /// Each run's mean errors, seed by seed.
+    pub run_means: Vec<RunMean>,
+}
+
+/// One run's mean relative pose errors.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct RunMean {
+    /// The run's seed.
+    pub seed: u64,
+    /// Mean translational error, m.
+    pub trans_mean_m: f64,
+    /// Mean rotational error, rad.
+    pub rot_mean_rad: f64,
+}
+
+/// A mean over seeds and its standard error.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct MeanSe {
+    /// The mean.
+    pub mean: f64,
+    /// Its standard error (the sample spread over √seeds); none from one
+    /// seed.
+    pub se: Option<f64>,
+}
+
+impl MeanSe {
+    fn of(v: &[f64]) -> MeanSe {
+        let n = v.len();
+        let mean = v.iter().sum::<f64>() / n.max(1) as f64;
+        let se = (n > 1).then(|| {
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+            (var / n as f64).sqrt()
+        });
+        MeanSe { mean, se }
+    }
+}
+
+/// Scanner `a` against scanner `b`, drive by drive: the difference of
+/// their runs' mean errors (`a` − `b`) on each seed's drive, over the
+/// seeds. Both rode the same drives, so the drive's own luck (slip,
+/// where the tour turned) cancels in each difference.
+#[derive(Clone, Debug, Serialize)]
+pub struct ScannerDifference {
+    /// The first scanner.
+    pub a: String,
+    /// The scanner taken from it.
+    pub b: String,
+    /// Drives compared.
+    pub seeds: usize,
+    /// Translational error of `a` less that of `b`, m.
+    pub trans_m: MeanSe,
+    /// Rotational error of `a` less that of `b`, rad.
+    pub rot_rad: MeanSe,
+}
+
+impl ScannerDifference {
+    fn between(a: &SettingReport, b: &SettingReport) -> ScannerDifference {
+        let pairs: Vec<(&RunMean, &RunMean)> = a
+            .run_means
+            .iter()
+            .filter_map(|x| {
+                b.run_means
+                    .iter()
+                    .find(|y| y.seed == x.seed)
+                    .map(|y| (x, y))
+            })
+            .collect();
+        let diff = |f: fn(&RunMean) -> f64| -> Vec<f64> {
+            pairs.iter().map(|(x, y)| f(x) - f(y)).collect()
+        };
+        ScannerDifference {
+            a: a.setting.clone(),
+            b: b.setting.clone(),
+            seeds: pairs.len(),
+            trans_m: MeanSe::of(&diff(|r| r.trans_mean_m)),
+            rot_rad: MeanSe::of(&diff(|r| r.rot_mean_rad)),
+        }
+    }
+
+    /// Every two scanners of `scanners`, in their order.
+    fn all(scanners: &[SettingReport]) -> Vec<ScannerDifference> {
+        let mut out = Vec::new();
+        for (i, a) in scanners.iter().enumerate() {
+            for b in &scanners[i + 1..] {
+                out.push(ScannerDifference::between(a, b));
+            }
+        }
+        out
+    }
 }
 
 /// What `stucco study --json` prints (and `DIR/study.json` holds).
@@ -345,6 +436,8 @@ pub struct StudyReport {
     pub noise: Vec<SettingReport>,
     /// The scanners compared.
     pub scanners: Vec<SettingReport>,
+    /// Every two scanners compared drive by drive.
+    pub scanner_differences: Vec<ScannerDifference>,
     /// Runs mapped (settings × seeds).
     pub runs_mapped: usize,
     /// Runs driven in the simulator (presets × seeds).
@@ -673,12 +766,12 @@ fn std_of(v: impl Iterator<Item = f64> + Clone) -> f64 {
 }
 
 /// One setting's runs, summed up.
-fn summarise(setting: String, runs: &[RunScore]) -> SettingReport {
-    let rpes: Vec<Rpe> = runs.iter().map(|r| r.rpe).collect();
-    let odom: Vec<Rpe> = runs.iter().map(|r| r.odom_rpe).collect();
-    let walls: usize = runs.iter().map(|r| r.map.walls).sum();
+fn summarise(setting: String, runs: &[(u64, RunScore)]) -> SettingReport {
+    let rpes: Vec<Rpe> = runs.iter().map(|(_, r)| r.rpe).collect();
+    let odom: Vec<Rpe> = runs.iter().map(|(_, r)| r.odom_rpe).collect();
+    let walls: usize = runs.iter().map(|(_, r)| r.map.walls).sum();
     let per = |f: fn(&MapScore) -> f64| {
-        (runs.iter().map(|r| f(&r.map)).sum::<f64>() / walls.max(1) as f64).sqrt()
+        (runs.iter().map(|(_, r)| f(&r.map)).sum::<f64>() / walls.max(1) as f64).sqrt()
     };
     SettingReport {
         setting,
@@ -688,9 +781,17 @@ fn summarise(setting: String, runs: &[RunScore]) -> SettingReport {
         rot_run_std_rad: std_of(rpes.iter().map(|r| r.rot_mean_rad)),
         odom_rpe: pool(&odom),
         map_walls: walls,
-        map_unmatched: runs.iter().map(|r| r.map.unmatched).sum(),
+        map_unmatched: runs.iter().map(|(_, r)| r.map.unmatched).sum(),
         map_dist_rms_m: per(|m| m.dist_sq_sum),
         map_angle_rms_rad: per(|m| m.angle_sq_sum),
+        run_means: runs
+            .iter()
+            .map(|(seed, r)| RunMean {
+                seed: *seed,
+                trans_mean_m: r.rpe.trans_mean_m,
+                rot_mean_rad: r.rpe.rot_mean_rad,
+            })
+            .collect(),
     }
 }
 
@@ -764,9 +865,9 @@ pub fn run_study(job: &StudyJob, progress: impl Fn(usize, usize) + Sync) -> Resu
     // then every setting of it mapped, so at most a few drives are kept.
     let drive = study.drive();
     let tour = TourSpec::forwards(world.tour.clone());
-    let per_seed: Vec<Vec<RunScore>> = (0..seeds)
+    let per_seed: Vec<Vec<(u64, RunScore)>> = (0..seeds)
         .into_par_iter()
-        .map(|k| -> Result<Vec<RunScore>> {
+        .map(|k| -> Result<Vec<(u64, RunScore)>> {
             let seed = study.seed.wrapping_add(k);
             let mut scores = Vec::with_capacity(settings.len());
             for (p, preset) in presets.iter().enumerate() {
@@ -784,7 +885,7 @@ pub fn run_study(job: &StudyJob, progress: impl Fn(usize, usize) + Sync) -> Resu
                 }
             }
             scores.sort_by_key(|(i, _)| *i);
-            Ok(scores.into_iter().map(|(_, s)| s).collect())
+            Ok(scores.into_iter().map(|(_, s)| (seed, s)).collect())
         })
         .collect::<Result<_>>()?;
     let mut report = StudyReport {
@@ -801,19 +902,21 @@ pub fn run_study(job: &StudyJob, progress: impl Fn(usize, usize) + Sync) -> Resu
         fov: Vec::new(),
         noise: Vec::new(),
         scanners: Vec::new(),
+        scanner_differences: Vec::new(),
         runs_mapped: total,
         runs_driven: presets.len() * seeds as usize,
         wall_seconds: 0.0,
     };
     let mut runs_of = per_seed.into_iter().map(Vec::into_iter).collect::<Vec<_>>();
     for s in &settings {
-        let runs: Vec<RunScore> = runs_of.iter_mut().filter_map(Iterator::next).collect();
+        let runs: Vec<(u64, RunScore)> = runs_of.iter_mut().filter_map(Iterator::next).collect();
         let summary = summarise(s.label.clone(), &runs);
         match s.axis {
             Some(axis) => report.axis_mut(axis).push(summary),
             None => report.scanners.push(summary),
         }
     }
+    report.scanner_differences = ScannerDifference::all(&report.scanners);
     report.wall_seconds = started.elapsed().as_secs_f64();
     if let Some(dir) = &job.out {
         write_outputs(dir, &report)?;
@@ -991,6 +1094,54 @@ mod tests {
             n += 1;
         }
         assert!(n >= 2);
+    }
+
+    #[test]
+    fn two_scanners_are_compared_drive_by_drive() {
+        let runs = |means: &[(u64, f64, f64)]| -> Vec<(u64, RunScore)> {
+            means
+                .iter()
+                .map(|&(seed, t, r)| {
+                    let rpe = Rpe {
+                        pairs: 10,
+                        trans_mean_m: t,
+                        rot_mean_rad: r,
+                        ..Rpe::default()
+                    };
+                    let (odom_rpe, map) = (Rpe::default(), MapScore::default());
+                    (seed, RunScore { rpe, odom_rpe, map })
+                })
+                .collect()
+        };
+        // Drives of very different luck, `a` 1 mm and 1 mrad behind `b` on
+        // each but the last, 3 behind there; only `a` drove seed 9.
+        let a = runs(&[
+            (1, 0.011, 0.003),
+            (2, 0.031, 0.009),
+            (3, 0.006, 0.002),
+            (4, 0.023, 0.007),
+            (9, 0.5, 0.5),
+        ]);
+        let b = runs(&[
+            (1, 0.010, 0.002),
+            (2, 0.030, 0.008),
+            (3, 0.005, 0.001),
+            (4, 0.020, 0.004),
+        ]);
+        let (a, b) = (summarise("a".into(), &a), summarise("b".into(), &b));
+        let d = ScannerDifference::between(&a, &b);
+        assert_eq!((d.a.as_str(), d.b.as_str(), d.seeds), ("a", "b", 4));
+        // Differences 1, 1, 1, 3: mean 1.5, sample σ 1, s.e. 1 / √4.
+        for m in [d.trans_m, d.rot_rad] {
+            assert!((m.mean - 0.0015).abs() < 1e-12, "{m:?}");
+            assert!((m.se.unwrap() - 0.0005).abs() < 1e-12, "{m:?}");
+        }
+        let one = ScannerDifference::between(&a, &summarise("c".into(), &runs(&[(2, 0.0, 0.0)])));
+        assert_eq!(one.seeds, 1);
+        assert!(one.trans_m.se.is_none() && (one.trans_m.mean - 0.031).abs() < 1e-12);
+        let all = ScannerDifference::all(&[a, b.clone(), b]);
+        assert_eq!(all.len(), 3);
+        assert_eq!((all[2].a.as_str(), all[2].b.as_str()), ("b", "b"));
     }
 
     #[test]
