@@ -17,11 +17,13 @@
 //!   stretch from its free side, is marked [`WallRole::InFront`]: a
 //!   table's legs in a row, a cabinet, a glass wall's frames (the "large
 //!   false door" of paper A, corrected once the wall behind is seen).
-//! - A line that lies along a longer wall of the map, close to it but a
-//!   few degrees askew, is a fit across two surfaces (a wall and a shut
-//!   door's leaf recessed in it, seen far off through a door): it founds
-//!   nothing until seen more often than the wall, and one founded before
-//!   the wall was mapped is marked [`WallRole::Across`] once the wall is.
+//! - A line that lies along a wall of the map, close to it but a few
+//!   degrees askew, is a fit across two surfaces (a wall and a shut
+//!   door's leaf recessed in it, seen far off through a door; a bed's foot
+//!   and the desk's legs past its end): it founds nothing until seen more
+//!   often than the wall, and the wall it out-sights is marked
+//!   [`WallRole::Across`]; one founded before a longer wall it lies along
+//!   was mapped is marked once that wall is.
 
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3, Point2, Vector2};
 use serde::{Deserialize, Serialize};
@@ -149,7 +151,8 @@ pub struct MapUpdate {
     /// Walls found to stand in front of a wall by this scan.
     pub in_front: Vec<WallId>,
     /// Walls found to be fits across two surfaces by this scan: each lies
-    /// askew along a longer wall.
+    /// askew along a longer wall, or a wall founded by this scan lies
+    /// askew along it and has been seen more often.
     pub across: Vec<WallId>,
 }
 
@@ -397,8 +400,9 @@ impl WallMapEkf {
         update.in_front = self.mark_in_front(&matched, &laser);
         if self.config.extend_map {
             for j in unknown {
-                if let Some(id) = self.consider(&seen[j], &noise[j]) {
+                if let Some((id, outsighted)) = self.consider(&seen[j], &noise[j]) {
                     update.added.push(id);
+                    update.across.extend(outsighted);
                 }
             }
             self.candidates
@@ -412,7 +416,8 @@ impl WallMapEkf {
             .collect();
         let merged = self.merge_around(&touched);
         update.merged.extend(merged);
-        update.across = self.mark_askew(&touched);
+        let across = self.mark_askew(&touched);
+        update.across.extend(across);
         update
     }
 
@@ -649,8 +654,10 @@ impl WallMapEkf {
     }
 
     /// Tracks an observation no map wall is near; returns the new wall's id
-    /// when it has been seen often enough to join the map.
-    fn consider(&mut self, z: &Wall, r: &Matrix2<f64>) -> Option<WallId> {
+    /// when it has been seen often enough to join the map, with the walls
+    /// it lies askew along and has out-sighted, now marked
+    /// [`WallRole::Across`] (see [`WallMapEkf::askew_rival`]).
+    fn consider(&mut self, z: &Wall, r: &Matrix2<f64>) -> Option<(WallId, Vec<WallId>)> {
         if z.length_m() < self.config.new_wall_min_length_m
             || z.points < self.config.new_wall_min_points
             || z.rms_residual_m.is_nan()
@@ -707,7 +714,17 @@ impl WallMapEkf {
             return None;
         }
         let c = self.candidates.swap_remove(k);
-        Some(self.augment(z, r, c.extent_m, c.sightings))
+        let mut outsighted = Vec::new();
+        if rival.is_some() {
+            let cfg = &self.config;
+            for w in &mut self.walls {
+                if w.role == WallRole::Wall && askew_along(cfg, alpha, &ends, w) {
+                    w.role = WallRole::Across;
+                    outsighted.push(w.id);
+                }
+            }
+        }
+        Some((self.augment(z, r, c.extent_m, c.sightings), outsighted))
     }
 
     /// Whether a stretch seen from `ends[0]` to `ends[1]` (map frame), at
@@ -726,7 +743,9 @@ impl WallMapEkf {
     /// [`WallMapEkf::mark_askew`]), or a fit across a face the map holds
     /// and what lies beyond it (a radiator and the wall past its end, a
     /// bed's foot and the legs of the desk beside it), which the face,
-    /// seen from everywhere in the room, outnumbers.
+    /// seen from everywhere in the room, outnumbers. A line that does
+    /// outnumber them is founded, and they are marked
+    /// [`WallRole::Across`]: each was the fit across.
     fn askew_rival(&self, alpha: f64, ends: &[Point2<f64>; 2]) -> Option<u32> {
         self.walls
             .iter()

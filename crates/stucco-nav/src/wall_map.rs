@@ -20,9 +20,10 @@ pub enum WallRole {
     /// but no room's boundary (the "large false door" of paper A,
     /// corrected once the wall behind was seen across it).
     InFront,
-    /// A line fitted across a wall and what is recessed in it or stands
-    /// before it (a shut door's leaf, seen far off through a door), a few
-    /// degrees askew along the wall: still a landmark, no room's boundary.
+    /// A line fitted across a surface and what is recessed in it, stands
+    /// before it or lies past its end (a shut door's leaf, seen far off
+    /// through a door; a bed's foot and the desk's legs beside it), a few
+    /// degrees askew along it: still a landmark, no room's boundary.
     Across,
 }
 

@@ -781,6 +781,33 @@ fn a_fit_across_a_wall_and_a_door_leaf_is_marked_once_the_wall_is_mapped() {
 }
 
 #[test]
+fn a_longer_fit_across_a_face_is_marked_once_the_face_is_mapped() {
+    // The first sightings, far off: a bed's foot (x = 3, 2 m long) and the
+    // desk's legs past its end, fitted as one line 3.7 m long, 2.5° askew.
+    let mut f = WallMapEkf::new(WallMapConfig::default(), Pose2::IDENTITY, Matrix3::zeros());
+    let tilt = 2.5f64.to_radians();
+    let askew = seen((3.0, -0.9), (3.0 - 3.7 * tilt.tan(), 2.8), 40);
+    for _ in 0..4 {
+        f.scan(std::slice::from_ref(&askew));
+    }
+    assert_eq!(f.map().walls.len(), 1, "the askew fit is founded first");
+    let askew_id = f.map().walls[0].id;
+    // Then the foot itself, seen from everywhere in the room: founded once
+    // it out-sights the fit, which is marked though it is the longer.
+    let foot = seen((3.0, -1.0), (3.0, 1.0), 60);
+    let mut across = Vec::new();
+    for _ in 0..12 {
+        across.extend(f.scan(std::slice::from_ref(&foot)).across);
+    }
+    assert_eq!(across, [askew_id]);
+    let map = f.map();
+    let building: Vec<&MapWall> = map.building_walls().collect();
+    assert_eq!(building.len(), 1, "{building:?}");
+    assert!((building[0].rho_m - 3.0).abs() < 0.01 && building[0].alpha_rad.abs() < 0.01);
+    assert!(building[0].length_m() < 2.5, "{building:?}");
+}
+
+#[test]
 fn a_wall_with_a_shorter_face_recessed_in_it_stays_a_wall() {
     // A wall at x = 3, 6 m, and a shut door's leaf 7.5 cm behind it seen
     // through its frame, 0.7 m: the leaf stands behind, not the wall in
