@@ -748,29 +748,38 @@ fn seen(a: (f64, f64), b: (f64, f64), points: u32) -> Wall {
     }
 }
 
-#[test]
-fn a_fit_across_a_wall_and_a_door_leaf_is_marked_once_the_wall_is_mapped() {
-    // The first sightings, far off through a door: the wall (x = 3) and a
-    // shut door's leaf recessed 7.5 cm in it, fitted as one line 4° askew.
+/// A filter that saw `askew` 4 times (founding it), then `surface` 12
+/// times: the filter, and the surface's one building wall (on x = 3), once
+/// the walls marked across on the way are the askew fit's alone.
+fn askew_fit_then_its_surface(askew: &Wall, surface: &Wall) -> (WallMapEkf, MapWall) {
     let mut f = WallMapEkf::new(WallMapConfig::default(), Pose2::IDENTITY, Matrix3::zeros());
-    let askew = seen((3.0, -0.2), (3.0 + 1.3 * 4f64.to_radians().tan(), 1.1), 24);
     for _ in 0..4 {
-        f.scan(std::slice::from_ref(&askew));
+        f.scan(std::slice::from_ref(askew));
     }
     assert_eq!(f.map().walls.len(), 1, "the askew fit is founded first");
     let askew_id = f.map().walls[0].id;
-    // Then the wall itself, seen whole from near: founded, and the askew
-    // fit along it marked, no wall of the building any more.
-    let wall = seen((3.0, -4.0), (3.0, 4.0), 300);
     let mut across = Vec::new();
     for _ in 0..12 {
-        across.extend(f.scan(std::slice::from_ref(&wall)).across);
+        across.extend(f.scan(std::slice::from_ref(surface)).across);
     }
     assert_eq!(across, [askew_id]);
     let map = f.map();
     let building: Vec<&MapWall> = map.building_walls().collect();
     assert_eq!(building.len(), 1, "{building:?}");
-    assert!((building[0].rho_m - 3.0).abs() < 0.01 && building[0].alpha_rad.abs() < 0.01);
+    let wall = building[0].clone();
+    assert!((wall.rho_m - 3.0).abs() < 0.01 && wall.alpha_rad.abs() < 0.01);
+    (f, wall)
+}
+
+#[test]
+fn a_fit_across_a_wall_and_a_door_leaf_is_marked_once_the_wall_is_mapped() {
+    // The first sightings, far off through a door: the wall (x = 3) and a
+    // shut door's leaf recessed 7.5 cm in it, fitted as one line 4° askew;
+    // then the wall itself, seen whole from near: founded, and the askew
+    // fit along it marked, no wall of the building any more.
+    let askew = seen((3.0, -0.2), (3.0 + 1.3 * 4f64.to_radians().tan(), 1.1), 24);
+    let wall = seen((3.0, -4.0), (3.0, 4.0), 300);
+    let (mut f, _) = askew_fit_then_its_surface(&askew, &wall);
     // The askew fit seen again, less often than the wall, founds nothing
     // beside it.
     for _ in 0..6 {
@@ -783,28 +792,14 @@ fn a_fit_across_a_wall_and_a_door_leaf_is_marked_once_the_wall_is_mapped() {
 #[test]
 fn a_longer_fit_across_a_face_is_marked_once_the_face_is_mapped() {
     // The first sightings, far off: a bed's foot (x = 3, 2 m long) and the
-    // desk's legs past its end, fitted as one line 3.7 m long, 2.5° askew.
-    let mut f = WallMapEkf::new(WallMapConfig::default(), Pose2::IDENTITY, Matrix3::zeros());
+    // desk's legs past its end, fitted as one line 3.7 m long, 2.5° askew;
+    // then the foot itself, seen from everywhere in the room: founded once
+    // it out-sights the fit, which is marked though it is the longer.
     let tilt = 2.5f64.to_radians();
     let askew = seen((3.0, -0.9), (3.0 - 3.7 * tilt.tan(), 2.8), 40);
-    for _ in 0..4 {
-        f.scan(std::slice::from_ref(&askew));
-    }
-    assert_eq!(f.map().walls.len(), 1, "the askew fit is founded first");
-    let askew_id = f.map().walls[0].id;
-    // Then the foot itself, seen from everywhere in the room: founded once
-    // it out-sights the fit, which is marked though it is the longer.
     let foot = seen((3.0, -1.0), (3.0, 1.0), 60);
-    let mut across = Vec::new();
-    for _ in 0..12 {
-        across.extend(f.scan(std::slice::from_ref(&foot)).across);
-    }
-    assert_eq!(across, [askew_id]);
-    let map = f.map();
-    let building: Vec<&MapWall> = map.building_walls().collect();
-    assert_eq!(building.len(), 1, "{building:?}");
-    assert!((building[0].rho_m - 3.0).abs() < 0.01 && building[0].alpha_rad.abs() < 0.01);
-    assert!(building[0].length_m() < 2.5, "{building:?}");
+    let (_, wall) = askew_fit_then_its_surface(&askew, &foot);
+    assert!(wall.length_m() < 2.5, "{wall:?}");
 }
 
 #[test]
