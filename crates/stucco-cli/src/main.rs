@@ -611,17 +611,15 @@ fn run_study_command(job: StudyJob, json: bool) -> ExitCode {
             "{:<30} {:>22} {:>22}",
             "drive by drive (mean ± s.e.)", "trans m", "rot rad"
         );
-        let se = |s: Option<f64>, digits: usize| {
-            s.map_or_else(|| "—".to_owned(), |s| format!("{s:.digits$}"))
-        };
+        let se = |s: Option<f64>| s.map_or_else(|| "—".to_owned(), |s| format!("{s:.5}"));
         for d in &report.scanner_differences {
             println!(
                 "{:<30} {:>+10.5} ± {:<9} {:>+10.5} ± {:<9}",
                 format!("{} − {}", d.a, d.b),
                 d.trans_m.mean,
-                se(d.trans_m.se, 5),
+                se(d.trans_m.se),
                 d.rot_rad.mean,
-                se(d.rot_rad.se, 5),
+                se(d.rot_rad.se),
             );
         }
     }

@@ -344,12 +344,11 @@ pub struct MeanSe {
 impl MeanSe {
     fn of(v: &[f64]) -> MeanSe {
         let n = v.len();
-        let mean = v.iter().sum::<f64>() / n.max(1) as f64;
-        let se = (n > 1).then(|| {
-            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-            (var / n as f64).sqrt()
-        });
-        MeanSe { mean, se }
+        MeanSe {
+            mean: v.iter().sum::<f64>() / n.max(1) as f64,
+            // The spread over n, √(n / (n − 1)) for the sample's, over √n.
+            se: (n > 1).then(|| std_of(v.iter().copied()) / ((n - 1) as f64).sqrt()),
+        }
     }
 }
 
@@ -759,6 +758,7 @@ fn pool(rpes: &[Rpe]) -> Rpe {
     }
 }
 
+/// The spread of `v` about its mean (over n, not n − 1).
 fn std_of(v: impl Iterator<Item = f64> + Clone) -> f64 {
     let n = v.clone().count().max(1) as f64;
     let m = v.clone().sum::<f64>() / n;
