@@ -382,20 +382,27 @@ impl CameraRig {
         &self.spec
     }
 
-    /// The profiles due before `t1_ns` from a robot at `pose`, the sensor
-    /// at `origin_m` in the robot's frame.
+    /// The profiles due in the physics step from `t0_ns` to `t1_ns`, each
+    /// shot from where the robot is at its stamp: at `pose0` when the step
+    /// began, moving at `twist`; the sensor at `origin_m` in the robot's
+    /// frame.
+    #[allow(clippy::too_many_arguments)]
     pub fn shoot(
         &mut self,
         scene: &Scene,
+        t0_ns: i64,
         t1_ns: i64,
-        pose: &Pose2,
+        pose0: &Pose2,
+        twist: &Twist2,
         origin_m: [f64; 3],
         rng: &mut impl Rng,
     ) -> Vec<RangeProfile> {
-        let at = pose.transform_point(&nalgebra::Point2::new(origin_m[0], origin_m[1]));
         let mut out = Vec::new();
         let noise = Normal::new(0.0, self.spec.range_sigma_m.max(1e-12)).ok();
         while self.next_ns < t1_ns {
+            let tau_s = (self.next_ns - t0_ns).max(0) as f64 * 1e-9;
+            let pose = *pose0 * twist.displacement(tau_s);
+            let at = pose.transform_point(&nalgebra::Point2::new(origin_m[0], origin_m[1]));
             let s = &self.spec;
             let az = pose.theta + s.azimuth_rad;
             let n = s.rays.max(2);

@@ -250,12 +250,12 @@ impl Simulator {
         if let Some((cam, rng)) = &mut self.camera {
             let origin = [0.0, 0.0, cam.spec().height_m];
             out.profiles
-                .extend(cam.shoot(&self.scene, t1, &pose, origin, rng));
+                .extend(cam.shoot(&self.scene, t0, t1, &before, &twist, origin, rng));
         }
         if let (Some((cam, rng)), Some(d)) = (&mut self.tool_camera, &self.deposition) {
             let origin = d.state().nozzle_m;
             out.profiles
-                .extend(cam.shoot(&self.scene, t1, &pose, origin, rng));
+                .extend(cam.shoot(&self.scene, t0, t1, &before, &twist, origin, rng));
         }
         while self.next_odometry_ns <= t1 {
             let stamp = Stamp::from_nanos(self.next_odometry_ns);

@@ -4,7 +4,9 @@
 
 use std::path::Path;
 use stucco_core::{DriveCommand, Platform, RangeProfile};
-use stucco_sim::{FaultConfig, Interval, SimConfig, Simulator, StuckEncoder, WorldSpec};
+use stucco_sim::{
+    FaultConfig, Interval, SimConfig, Simulator, StuckEncoder, TOOL_CAMERA, WorldSpec,
+};
 
 fn world_at(name: &str, at: [f64; 2], heading_deg: f64) -> WorldSpec {
     let path = format!("{}/worlds/{name}.toml", env!("CARGO_MANIFEST_DIR"));
@@ -248,5 +250,61 @@ fn a_stalled_drive_rolls_to_a_stop_and_a_stuck_steering_holds() {
     assert!(
         after.steer_rad > 0.4 && after.wheel_speed_mps > 0.29,
         "{after:?}"
+    );
+}
+
+/// Each profile is shot from where the robot is at its stamp, not where a
+/// physics step leaves it: pivoting at about 1 rad/s in the corridor, the
+/// camera's reach to the north wall along its fan is the one the pose at
+/// the stamp gives (10 ms later the turn has moved it by 7 mm or more).
+#[test]
+fn a_profile_is_shot_from_where_the_robot_is_at_its_stamp() {
+    use std::f64::consts::FRAC_PI_2;
+    let w = world_at("corridor", [9.0, 1.0], 0.0);
+    let mut sim = Simulator::new(&w, SimConfig::default(), Some(1));
+    sim.command(DriveCommand {
+        speed_mps: 0.6,
+        steer_rad: FRAC_PI_2,
+    });
+    let mut poses = std::collections::BTreeMap::new();
+    poses.insert(0, sim.truth().drive.pose);
+    // The north wall (y = 2) along the fan, from a camera at the pose.
+    let reach = |p: &stucco_core::Pose2| (2.0 - p.y) / (p.theta + FRAC_PI_2).sin();
+    let (mut checked, mut moved) = (0, f64::INFINITY);
+    // The mean of some 90 rays' reach, each with the camera's 1 cm noise.
+    const TOLERANCE_M: f64 = 0.003;
+    for _ in 0..150 {
+        let r = sim.advance(0.01);
+        let truth = sim.truth();
+        poses.insert(truth.stamp.as_nanos(), truth.drive.pose);
+        for p in r.profiles.iter().filter(|p| p.sensor != TOOL_CAMERA) {
+            let at = poses[&p.stamp.as_nanos()];
+            if !(0.5..1.0).contains(&at.theta) {
+                continue;
+            }
+            let on_wall: Vec<f64> = p
+                .elevations_rad
+                .iter()
+                .zip(&p.ranges_m)
+                .filter(|(e, r)| r.is_finite() && (0.2..2.5).contains(&(1.0 + *r * e.sin())))
+                .map(|(e, r)| r * e.cos())
+                .collect();
+            assert!(on_wall.len() > 50, "{} rays on the wall", on_wall.len());
+            let mean = on_wall.iter().sum::<f64>() / on_wall.len() as f64;
+            assert!(
+                (mean - reach(&at)).abs() < TOLERANCE_M,
+                "reach {mean:.4} m, {:.4} m from the pose at the stamp",
+                reach(&at)
+            );
+            let later = poses[&(p.stamp.as_nanos() + 10_000_000)];
+            moved = moved.min((reach(&later) - reach(&at)).abs());
+            checked += 1;
+        }
+    }
+    assert!(checked >= 5, "{checked} profiles in the turn");
+    // Shot 10 ms late, every profile would have been outside the tolerance.
+    assert!(
+        moved > 2.0 * TOLERANCE_M,
+        "the turn moved the reach {moved} m in 10 ms"
     );
 }
