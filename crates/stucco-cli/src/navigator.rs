@@ -450,6 +450,7 @@ impl Navigator {
                     wall,
                     along_m: w.along_m,
                     sill_head_m: w.sill_head_m,
+                    along_sigma_m: w.along_sigma_m,
                 })
                 .collect(),
             obstacles: self.room.floor_boxes.clone(),
@@ -1081,6 +1082,23 @@ mod tests {
         assert_eq!(out.len(), 2);
     }
 
+    /// A robot at the apartment's start (seed 7), knowing the living room,
+    /// and where it starts.
+    #[allow(clippy::expect_used)]
+    fn at_the_apartments_start() -> (Navigator, Pose2) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../sim/worlds/apartment.toml");
+        let world = WorldSpec::load(&path).expect("the apartment");
+        let start = Pose2::new(
+            world.robot.at[0],
+            world.robot.at[1],
+            world.robot.heading_deg.to_radians(),
+        );
+        let x0 = RoomState::new(start.x, start.y, start.theta, 5.0, 2.85);
+        let nav = Navigator::new(&world, 7, x0, [0.01, 0.01]).expect("a robot");
+        (nav, start)
+    }
+
     /// The robot pivots at 1 rad/s from the apartment's start, where no
     /// wall has been seen by the laser often enough yet, so the body's
     /// camera measures them too: its walls, stamped as taken, and the
@@ -1091,16 +1109,7 @@ mod tests {
     #[test]
     #[allow(clippy::expect_used)]
     fn a_fast_pivot_with_the_camera_measuring_walls_keeps_the_heading() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../sim/worlds/apartment.toml");
-        let world = WorldSpec::load(&path).expect("the apartment");
-        let start = Pose2::new(
-            world.robot.at[0],
-            world.robot.at[1],
-            world.robot.heading_deg.to_radians(),
-        );
-        let x0 = RoomState::new(start.x, start.y, start.theta, 5.0, 2.85);
-        let mut nav = Navigator::new(&world, 7, x0, [0.01, 0.01]).expect("a robot");
+        let (mut nav, start) = at_the_apartments_start();
         assert!(nav.camera.is_some());
         let mut worst = 0.0f64;
         // Turning left at 0.6 m/s of the front wheel for 3 s, then still.
@@ -1127,16 +1136,7 @@ mod tests {
     #[test]
     #[allow(clippy::expect_used)]
     fn a_profile_shot_in_a_pivot_gets_the_pose_it_was_shot_from() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../sim/worlds/apartment.toml");
-        let world = WorldSpec::load(&path).expect("the apartment");
-        let start = Pose2::new(
-            world.robot.at[0],
-            world.robot.at[1],
-            world.robot.heading_deg.to_radians(),
-        );
-        let x0 = RoomState::new(start.x, start.y, start.theta, 5.0, 2.85);
-        let mut nav = Navigator::new(&world, 7, x0, [0.01, 0.01]).expect("a robot");
+        let (mut nav, _) = at_the_apartments_start();
         let (mut worst, mut least_turn) = (0.0f64, f64::INFINITY);
         let mut before: Option<(Stamp, Pose2)> = None;
         for k in 0..150 {

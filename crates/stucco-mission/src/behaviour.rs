@@ -110,7 +110,8 @@ pub struct Behaviour {
 #[derive(Clone, Debug)]
 enum Law {
     Hold,
-    Pivot,
+    /// A turn on the spot, at most this fast if given, rad/s.
+    Pivot(Option<f64>),
     Regulate(PoseRegulator),
     Reverse(PoseRegulator),
     Wall {
@@ -138,8 +139,17 @@ impl Behaviour {
                 heading_rad: wrap_angle(heading_rad),
                 phase: PivotPhase::Steer,
             },
-            law: Law::Pivot,
+            law: Law::Pivot(None),
             started: None,
+        }
+    }
+
+    /// A turn on the spot to `heading_rad` no faster than `rate_radps`: a
+    /// look, sweeping a camera's fan slowly across what it is to measure.
+    pub fn pivot_slowly(heading_rad: f64, rate_radps: f64) -> Self {
+        Behaviour {
+            law: Law::Pivot(Some(rate_radps.max(PIVOT_CREEP_RADPS))),
+            ..Self::pivot(heading_rad)
         }
     }
 
@@ -242,7 +252,7 @@ impl Behaviour {
         let pose = est.pose;
         match (&mut self.law, &mut self.kind) {
             (Law::Hold, _) => Step::Drive(DriveCommand::STOP),
-            (Law::Pivot, BehaviourKind::Pivot { heading_rad, phase }) => {
+            (Law::Pivot(top), BehaviourKind::Pivot { heading_rad, phase }) => {
                 // The wheel needs this long to swing through 90°.
                 let settle = vehicle.max_steer_rad / vehicle.max_steer_rate_radps + 0.1;
                 let err = wrap_angle(*heading_rad - pose.theta);
@@ -263,7 +273,7 @@ impl Behaviour {
                             self.started = Some(now);
                             return Step::Drive(DriveCommand::STOP);
                         }
-                        let omega = pivot_rate(err.abs(), vehicle);
+                        let omega = pivot_rate(err.abs(), vehicle).min(top.unwrap_or(f64::MAX));
                         Step::Drive(DriveCommand {
                             speed_mps: omega * vehicle.wheelbase_m,
                             steer_rad: steer,
@@ -278,7 +288,7 @@ impl Behaviour {
                     }
                 }
             }
-            (Law::Pivot, _) => Step::Done,
+            (Law::Pivot(_), _) => Step::Done,
             (Law::Regulate(law), BehaviourKind::Regulate { goal }) => {
                 let rel = goal.inverse() * pose;
                 if -rel.x <= law.tolerance_m {

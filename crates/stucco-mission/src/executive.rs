@@ -247,6 +247,18 @@ pub enum EventKind {
         /// Its heading from the station's, rad.
         heading_off_rad: f64,
     },
+    /// A plastering survey looks again at a window's edge it bracketed
+    /// loosely: the body's camera swept slowly across it.
+    WindowEdgeLook {
+        /// The task.
+        task: usize,
+        /// The wall.
+        wall: WallName,
+        /// Where the edge was, along the wall, m.
+        along_m: f64,
+        /// How uncertain it was, m (standard deviation).
+        sigma_m: f64,
+    },
     /// The camera on the tool found a window the plan did not know, at a
     /// station: the plan keeps it out of the coat from that station on.
     WindowFound {
@@ -410,6 +422,9 @@ struct ActiveTask {
     /// A way through doors of the floor plan (`go_to_room`, or a
     /// `pass_door` through a door the plan has).
     doorway: Option<Doorway>,
+    /// A plastering survey has looked again at the window edges it
+    /// bracketed loosely.
+    edges_looked_at: bool,
 }
 
 /// A loop driven corner to corner (a `map_room`'s, or a plastering
@@ -1345,6 +1360,7 @@ impl Executive {
                             blocked_s: 0.0,
                             plaster: None,
                             doorway: None,
+                            edges_looked_at: false,
                         });
                         self.fail(now, reason);
                         return (DriveCommand::STOP, true);
@@ -1617,6 +1633,7 @@ impl Executive {
             blocked_s: 0.0,
             plaster,
             doorway,
+            edges_looked_at: false,
         })
     }
 
@@ -1830,6 +1847,29 @@ impl Executive {
                     }
                     Some(_) => a.legs = None,
                     None => {}
+                }
+                // A window edge the survey's camera bracketed loosely (seen
+                // across the room, in a pivot) is looked at again, slowly,
+                // before the plan keeps plaster out of the window.
+                if !a.edges_looked_at {
+                    a.edges_looked_at = true;
+                    let looks = edge_looks(&self.config, est, speed);
+                    if !looks.is_empty() {
+                        for (wall, along_m, sigma_m, way) in looks {
+                            self.events.push(Event {
+                                stamp: now,
+                                kind: EventKind::WindowEdgeLook {
+                                    task: a.index,
+                                    wall,
+                                    along_m,
+                                    sigma_m,
+                                },
+                            });
+                            a.queue.extend(way);
+                        }
+                        self.tool = park;
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
                 }
                 // Every wall seen from its standoff: plan on what was found.
                 let plan = match plan_room(&self.config, (walls, ceiling, region), est) {
@@ -2322,6 +2362,95 @@ impl Executive {
             }
         }
     }
+}
+
+/// A window edge more uncertain than this after a survey is looked at
+/// again, m (standard deviation): the plan keeps plaster 2 cm of a window
+/// or more, which such an edge misses 2.5 times in a hundred.
+const LOOK_EDGE_SIGMA_M: f64 = 0.008;
+
+/// How fast a look sweeps the body camera's fan along the wall, m/s: a
+/// profile every centimetre at the camera's 20 a second.
+const LOOK_SWEEP_MPS: f64 = 0.2;
+
+/// How far a look sweeps either side of the edge, m (at least three of
+/// its standard deviations): the turn onto the sweep's start stops within
+/// 0.01 rad of it, 3 cm at 3 m.
+const LOOK_REACH_M: f64 = 0.08;
+
+/// Largest angle between the body camera's fan and a wall's normal a look
+/// is made at, rad (the window finder takes profiles to 25°).
+const LOOK_INCIDENCE_RAD: f64 = 0.26;
+
+/// The body's camera looks out of the robot's left side from the rear
+/// axle (as the survey's clockwise loop has it).
+const BODY_CAMERA_AZIMUTH_RAD: f64 = std::f64::consts::FRAC_PI_2;
+
+/// The looks at the window edges `est` knows loosely (not doors): for each, the way to
+/// a place the robot can stand and turn, from which the body's camera
+/// meets the edge squarely enough, and a slow turn sweeping the camera's
+/// fan across it. Each with the wall, the edge and its spread. An edge no
+/// clear way leads to a place for is left as it is.
+fn edge_looks(
+    config: &ExecutiveConfig,
+    est: &Estimate,
+    speed: f64,
+) -> Vec<(WallName, f64, f64, Vec<Behaviour>)> {
+    let space = estimate_space(config, est, speed);
+    let mut from = est.pose;
+    let mut out = Vec::new();
+    // Doors are the laser's to measure (the camera finds them as openings
+    // down to the floor too).
+    for w in est
+        .windows
+        .iter()
+        .filter(|w| w.sill_head_m[0] > DOOR_SILL_M)
+    {
+        let g = WallGeometry::of(w.wall, est.room_m);
+        for k in 0..2 {
+            let sigma = w.along_sigma_m[k];
+            if sigma <= LOOK_EDGE_SIGMA_M {
+                continue;
+            }
+            let edge = g.origin + g.along * w.along_m[k];
+            // Places in front of the edge, nearest the robot's own
+            // distance from the wall first, squarely before it first.
+            let here = g.distance(&from.position().coords);
+            let mut places: Vec<(f64, f64)> = Vec::new();
+            for d in [here, 0.8, 1.2, 1.6, 2.0, 2.4, 2.8, 3.2] {
+                for off in [0.0, -0.15, 0.15, -0.3, 0.3] {
+                    places.push((d, off));
+                }
+            }
+            let look = places.into_iter().find_map(|(d, off)| {
+                let at = g.origin + g.along * (w.along_m[k] + off * d) + g.inward * d;
+                let to_edge = edge - at;
+                let across = to_edge.norm();
+                let incidence = (-g.inward.dot(&to_edge) / across).clamp(-1.0, 1.0).acos();
+                if !(d > 0.3 && incidence <= LOOK_INCIDENCE_RAD) {
+                    return None;
+                }
+                let aim = to_edge.y.atan2(to_edge.x) - BODY_CAMERA_AZIMUTH_RAD;
+                let reach = (LOOK_REACH_M.max(3.0 * sigma) / across).atan();
+                let start = Pose2::new(at.x, at.y, aim - reach);
+                let end = Pose2::new(at.x, at.y, aim + reach);
+                if !(space.pose_clear(&start) && space.pose_clear(&end)) {
+                    return None;
+                }
+                // The way ends near the heading (a small last turn is left
+                // to the line law); the sweep starts on it.
+                let (_, mut way) = planned_way(config, est, &from, &start, speed)?;
+                way.push(Behaviour::pivot(start.theta));
+                way.push(Behaviour::pivot_slowly(end.theta, LOOK_SWEEP_MPS / across));
+                Some((end, way))
+            });
+            if let Some((end, way)) = look {
+                out.push((w.wall, w.along_m[k], sigma, way));
+                from = end;
+            }
+        }
+    }
+    out
 }
 
 /// A plastering plan for `walls` (and the ceiling) on the room as `est`
@@ -3121,6 +3250,19 @@ fn next_room_depth(config: &ExecutiveConfig, est: &Estimate, door: usize) -> Opt
     })
 }
 
+/// The room as `est` knows it, for checking ways at `speed_mps`: its
+/// doors and what stands on its floor.
+fn estimate_space<'a>(config: &'a ExecutiveConfig, est: &'a Estimate, speed_mps: f64) -> Space<'a> {
+    Space::new(
+        est.room_m,
+        &est.doors,
+        &est.obstacles,
+        &config.vehicle,
+        &config.safety,
+        speed_mps,
+    )
+}
+
 /// The way from `from` to `goal` in the room `est` knows: the plain one
 /// (turn toward the goal, drive, turn to its heading) when the body and
 /// the supervisor's field keep clear of the walls, the doorways and what
@@ -3134,14 +3276,7 @@ fn planned_way(
     goal: &Pose2,
     speed_mps: f64,
 ) -> Option<(f64, Vec<Behaviour>)> {
-    let space = Space::new(
-        est.room_m,
-        &est.doors,
-        &est.obstacles,
-        &config.vehicle,
-        &config.safety,
-        speed_mps,
-    );
+    let space = estimate_space(config, est, speed_mps);
     // The plain way is checked as it will be driven.
     let plain = go_to(&config.gains, from, goal, speed_mps);
     if let Some(cost) = space.way_cost(from, &plain) {

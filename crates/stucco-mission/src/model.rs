@@ -72,6 +72,10 @@ pub struct WindowEstimate {
     pub along_m: [f64; 2],
     /// Its sill and head above the floor, m.
     pub sill_head_m: [f64; 2],
+    /// Standard deviation of each edge along the wall, m (0 where not
+    /// known: the edges are then taken as found).
+    #[serde(default)]
+    pub along_sigma_m: [f64; 2],
 }
 
 /// A wall of the rectangular room: where its axis starts, which way it

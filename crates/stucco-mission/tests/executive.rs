@@ -1079,6 +1079,7 @@ fn plaster_finding_a_window(camera: bool) -> WindowRun {
                     wall,
                     along_m: rect.u_m,
                     sill_head_m: rect.v_m,
+                    along_sigma_m: [0.005; 2],
                 });
                 window = Some((wall, rect, station));
             }
@@ -1096,6 +1097,112 @@ fn plaster_finding_a_window(camera: bool) -> WindowRun {
         events,
         plan: last_plan,
     }
+}
+
+/// A plastering survey of the 5 × 3 m room knowing a window in its north
+/// wall, 1.8-3.0 m along, its far edge `far_sigma_m` uncertain (and a
+/// door in its south wall as loose); up to the plan made again after it.
+/// The events, and each tick's pose.
+fn survey_knowing_a_window(far_sigma_m: f64) -> (Vec<Event>, Vec<Pose2>) {
+    let mut cfg = config(true);
+    cfg.spray = Some(stucco_plan::SprayTool::default());
+    let mut exec = Executive::new(cfg, vec![plaster(true)]);
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    robot.windows.push(WindowEstimate {
+        wall: WallName::North,
+        along_m: [1.8, 3.0],
+        sill_head_m: [0.9, 2.1],
+        along_sigma_m: [0.005, far_sigma_m],
+    });
+    // A door the camera found as an opening down to the floor, its edges
+    // as loose: the laser's to measure, not looked at.
+    robot.windows.push(WindowEstimate {
+        wall: WallName::South,
+        along_m: [1.0, 1.9],
+        sill_head_m: [0.0, 2.0],
+        along_sigma_m: [far_sigma_m; 2],
+    });
+    // A plan is made as the task starts, and again after the survey.
+    let plans = |events: &[Event]| {
+        events
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::PlanMade { .. }))
+            .count()
+    };
+    let (mut events, mut poses) = (Vec::new(), Vec::new());
+    for _ in 0..(600.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        events.extend(out.events);
+        if plans(&events) == 2 {
+            break;
+        }
+        robot.drive(out.drive);
+        poses.push(robot.pose);
+    }
+    assert_eq!(plans(&events), 2, "{:?}", kinds(&events));
+    (events, poses)
+}
+
+/// An edge the survey's camera bracketed loosely is looked at again before
+/// the plan is made: the body's camera (looking left) swept slowly across
+/// it, meeting the wall within 25° of square, a profile a centimetre or
+/// less apart at 20 a second. Edges known well are not.
+#[test]
+fn a_window_edge_known_loosely_is_swept_slowly_before_the_plan_is_made() {
+    let (events, poses) = survey_knowing_a_window(0.02);
+    let looks: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e.kind {
+            EventKind::WindowEdgeLook {
+                wall,
+                along_m,
+                sigma_m,
+                ..
+            } => Some((wall, along_m, sigma_m)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(looks, vec![(WallName::North, 3.0, 0.02)]);
+    assert!(
+        slow_crossings(&poses) >= 1,
+        "the fan never swept the edge slowly"
+    );
+    let (events, poses) = survey_knowing_a_window(0.005);
+    assert!(
+        !events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::WindowEdgeLook { .. })),
+        "{:?}",
+        kinds(&events)
+    );
+    assert_eq!(slow_crossings(&poses), 0);
+}
+
+/// Ticks in which the body camera's fan (looking left) passed the far
+/// edge of [`survey_knowing_a_window`]'s window meeting the wall within
+/// 25° of square, sweeping along it at 0.2 m/s or slower.
+fn slow_crossings(poses: &[Pose2]) -> usize {
+    let g = WallGeometry::of(WallName::North, ROOM);
+    let edge = g.origin + g.along * 3.0;
+    let fan = |p: &Pose2| p.theta + std::f64::consts::FRAC_PI_2;
+    poses
+        .windows(2)
+        .filter(|pair| {
+            let (a, b) = (pair[0], pair[1]);
+            let to = edge - b.position().coords;
+            let bearing = to.y.atan2(to.x);
+            let (ea, eb) = (
+                stucco_core::wrap_angle(fan(&a) - bearing),
+                stucco_core::wrap_angle(fan(&b) - bearing),
+            );
+            let incidence = (-g.inward.dot(&to) / to.norm()).acos();
+            let on_wall_mps = stucco_core::wrap_angle(b.theta - a.theta).abs() / DT * to.norm();
+            ea.signum() != eb.signum()
+                && ea.abs() < 0.5
+                && incidence < 25f64.to_radians()
+                && on_wall_mps <= 0.2 + 1e-3
+        })
+        .count()
 }
 
 #[test]

@@ -238,16 +238,25 @@ impl WindowFinder {
                 .then_some(along);
             if let Some(w) = close(&t, after, cfg) {
                 self.fuse(w);
+            } else {
+                for e in edges_alone(&t, after) {
+                    self.refine(e);
+                }
             }
         }
         self.last_along_m = Some(along);
         self.last_rays = rays;
     }
 
-    /// Ends the pass: tracks still open have no far edge and are dropped
-    /// (the window was not seen whole).
+    /// Ends the pass: tracks still open have no far edge (the window was
+    /// not seen whole); the edge each crossed, if any, narrows that edge
+    /// of a window found before.
     pub fn end_pass(&mut self) {
-        self.tracks.clear();
+        for t in std::mem::take(&mut self.tracks) {
+            for e in edges_alone(&t, None) {
+                self.refine(e);
+            }
+        }
         self.last_along_m = None;
         self.last_rays.clear();
     }
@@ -292,6 +301,25 @@ impl WindowFinder {
         self.fuse(w);
     }
 
+    /// Takes in one edge seen on its own, when it is an edge of a window
+    /// found before: of one at its heights whose edge on that side lies
+    /// within [`EDGE_GATE_SIGMAS`] of it, fused by their spreads. Alone, an
+    /// edge says nothing of where the window ends, and is dropped.
+    fn refine(&mut self, e: EdgeSighting) {
+        let k = usize::from(e.far);
+        let known = self.found.iter_mut().find(|w| {
+            w.sill_head_m[0] < e.z[1]
+                && e.z[0] < w.sill_head_m[1]
+                && (w.along_m[k] - e.along_m).abs()
+                    <= EDGE_GATE_SIGMAS * w.along_sigma_m[k].hypot(e.sigma_m)
+        });
+        if let Some(w) = known {
+            let (a, b) = (w.along_sigma_m[k].powi(-2), e.sigma_m.powi(-2));
+            w.along_m[k] = (a * w.along_m[k] + b * e.along_m) / (a + b);
+            w.along_sigma_m[k] = (a + b).sqrt().recip();
+        }
+    }
+
     /// Adds `w`, fused with a window found before in the same place: its
     /// edges by their spread, its sill and head by passes.
     fn fuse(&mut self, w: Window) {
@@ -310,6 +338,58 @@ impl WindowFinder {
         }
     }
 }
+
+/// One edge of a window seen without the other: a pass that crossed it and
+/// ended in the hole, or began there (a slow look across an edge the
+/// survey bracketed only loosely).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct EdgeSighting {
+    /// Where along the wall, m: halfway between the profiles either side.
+    along_m: f64,
+    /// Its standard deviation, m (see [`edge_sigma`]).
+    sigma_m: f64,
+    /// True for the window's far edge (the greater along the wall).
+    far: bool,
+    /// The hole's sill and head as seen, m.
+    z: [f64; 2],
+}
+
+/// The edges a pass crossed without seeing the window whole: into the
+/// hole from the wall with no wall after it, or out of it with none
+/// before, or into it and back out the same side (a look that turned
+/// back). The hole must have been seen in two profiles or more.
+fn edges_alone(t: &Track, after_m: Option<f64>) -> Vec<EdgeSighting> {
+    let (Some(first), Some(last)) = (t.gaps.first(), t.gaps.last()) else {
+        return Vec::new();
+    };
+    if t.gaps.len() < 2 {
+        return Vec::new();
+    }
+    let mut z0: Vec<f64> = t.gaps.iter().map(|g| g.z[0]).collect();
+    let mut z1: Vec<f64> = t.gaps.iter().map(|g| g.z[1]).collect();
+    z0.sort_by(f64::total_cmp);
+    z1.sort_by(f64::total_cmp);
+    let z = [z0[z0.len() / 2], z1[z1.len() / 2]];
+    let sighting = |wall: f64, hole: f64| EdgeSighting {
+        along_m: 0.5 * (wall + hole),
+        sigma_m: edge_sigma((hole - wall).abs()),
+        far: wall > hole,
+        z,
+    };
+    match (t.before_m, after_m) {
+        (Some(b), None) => vec![sighting(b, first.along_m)],
+        (None, Some(a)) => vec![sighting(a, last.along_m)],
+        // Wall on the same side going in and coming out: one edge twice.
+        (Some(b), Some(a)) if (first.along_m - b).signum() == (last.along_m - a).signum() => {
+            vec![sighting(b, first.along_m), sighting(a, last.along_m)]
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// How far an edge seen alone may lie from a known window's edge on its
+/// side, in their combined standard deviations, to be taken for it.
+const EDGE_GATE_SIGMAS: f64 = 3.0;
 
 /// The window of a finished track: edges halfway between the profiles on
 /// either side of it, sill and head the medians of its gaps'.
@@ -700,6 +780,57 @@ mod tests {
         let mut f = WindowFinder::new(WindowConfig::default());
         f.know(w);
         assert_eq!(f.windows()[0].along_m, [1.0, 2.0]);
+    }
+
+    #[test]
+    fn a_look_across_one_edge_of_a_known_window_narrows_that_edge() {
+        let window = [1.0, 2.0, 0.8, 1.9];
+        let look = |f: &mut WindowFinder, from: f64, step: f64, n: usize| {
+            for k in 0..n {
+                let u = from + step * k as f64;
+                f.add(&profile(u, 0.7, window), &pose(u, 0.7));
+            }
+            f.end_pass();
+        };
+        // Swept fast (profiles 15 cm apart): edges at 0.955 and 2.005,
+        // each 4.4 cm uncertain.
+        let mut f = WindowFinder::new(WindowConfig::default());
+        look(&mut f, 0.43, 0.15, 14);
+        let swept = f.windows()[0];
+        assert!((swept.along_m[1] - 2.005).abs() < 1e-9, "{swept:?}");
+        // Looks inside the hole only, toward the near edge: no wall seen,
+        // nothing changed.
+        look(&mut f, 1.905, -0.01, 20);
+        assert_eq!(f.windows()[0], swept);
+        // Slow looks, profiles 1 cm apart: from inside the hole out past
+        // its far edge, and from the wall across its near edge into it.
+        look(&mut f, 1.905, 0.01, 20);
+        look(&mut f, 0.905, 0.01, 20);
+        let w = f.windows();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].observations, 1, "{w:?}");
+        for (k, truth) in [1.0, 2.0].into_iter().enumerate() {
+            assert!((w[0].along_m[k] - truth).abs() < 0.006, "{w:?}");
+            assert!(w[0].along_sigma_m[k] < 0.006, "{w:?}");
+        }
+        assert_eq!(w[0].sill_head_m, swept.sill_head_m);
+        // A look that turns back: from the wall into the hole across the
+        // far edge, and out again the same way, in one pass.
+        let mut f = WindowFinder::new(WindowConfig::default());
+        look(&mut f, 0.43, 0.15, 14);
+        for k in (0..12).chain((0..12).rev()) {
+            let u = 2.055 - 0.01 * k as f64;
+            f.add(&profile(u, 0.7, window), &pose(u, 0.7));
+        }
+        f.end_pass();
+        let w = f.windows()[0];
+        assert!((w.along_m[1] - 2.0).abs() < 0.006, "{w:?}");
+        assert!(w.along_sigma_m[1] < 0.005, "{w:?}");
+        // Where no window is known, an edge alone finds none.
+        let mut g = WindowFinder::new(WindowConfig::default());
+        look(&mut g, 1.905, 0.01, 20);
+        look(&mut g, 0.905, 0.01, 20);
+        assert!(g.windows().is_empty(), "{:?}", g.windows());
     }
 
     #[test]
