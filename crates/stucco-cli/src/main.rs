@@ -700,6 +700,14 @@ fn print_run(r: &MissionReport) {
         r.path_length_m,
         r.safety_stops
     );
+    if let Some(c) = &r.consistency {
+        println!(
+            "  the filter's covariance against its errors: mean NEES {:.1} (position, 2 if honest), {:.1} (heading, 1 if honest); heading σ RMS {:.3}°",
+            c.position_nees,
+            c.heading_nees,
+            c.heading_sigma_rms_rad.to_degrees()
+        );
+    }
     if let Some(e) = &r.rpe_1m {
         println!(
             "  relative pose error over 1 m ({} pairs): {:.1} ± {:.1} mm, {:.3} ± {:.3}°",

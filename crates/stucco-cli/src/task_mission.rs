@@ -9,7 +9,7 @@ use crate::navigator::Navigator;
 use crate::plan_view::{PlanPath, PlanSegment, draw_plan};
 use crate::record::{RecordedMission, Recorder};
 use anyhow::{Context, Result};
-use nalgebra::{Point2, SVector};
+use nalgebra::{Matrix3, Point2, SVector, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::hash::Hasher;
@@ -41,6 +41,18 @@ pub struct TaskMissionJob {
     pub stop_after_s: Option<f64>,
     /// Record each run to `run.mcap` in its folder.
     pub record: bool,
+}
+
+/// How well the filter's covariance covered its errors over a run, the
+/// means taken on every control period.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FilterConsistency {
+    /// Mean NEES of the position: 2 when the covariance is honest.
+    pub position_nees: f64,
+    /// Mean NEES of the heading: 1 when the covariance is honest.
+    pub heading_nees: f64,
+    /// RMS of the heading's standard deviation as the filter gave it, rad.
+    pub heading_sigma_rms_rad: f64,
 }
 
 /// One task as the run left it.
@@ -195,6 +207,8 @@ pub struct MissionReport {
     pub pose_max_m: f64,
     /// RMS of the heading error, rad.
     pub heading_rms_rad: f64,
+    /// How well the filter's covariance covered its errors over the run.
+    pub consistency: Option<FilterConsistency>,
     /// Relative pose error over pairs of poses 1 m apart along the true
     /// path (none if the robot did not drive 1 m).
     pub rpe_1m: Option<stucco_nav::Rpe>,
@@ -906,7 +920,7 @@ fn run_once(
         if step.is_multiple_of(5) {
             trace.push(&est_w, &truth_w);
         }
-        trace.errors(&est_w, &truth_w);
+        trace.errors(&est_w, &truth_w, &nav.pose_covariance());
         step += 1;
         if step.is_multiple_of(50) {
             let task = exec.current_task().map_or("", |t| t.1);
@@ -1054,6 +1068,7 @@ fn run_once(
         pose_rms_m: (trace.pos2 / n).sqrt(),
         pose_max_m: trace.pos_max,
         heading_rms_rad: (trace.head2 / n).sqrt(),
+        consistency: trace.consistency.report(),
         rpe_1m: stucco_nav::relative_pose_error(
             &trace.poses.0,
             &trace.poses.1,
@@ -1135,9 +1150,49 @@ struct Trace {
     pos2: f64,
     head2: f64,
     pos_max: f64,
+    consistency: Consistency,
     n: usize,
     length: f64,
     last: Option<Pose2>,
+}
+
+/// How well a filter's covariance covers its errors: the mean normalized
+/// estimation error squared (NEES) of its position and of its heading, and
+/// the RMS of the heading's σ. A filter whose covariance is honest has
+/// mean NEES 2 for the position (two degrees of freedom) and 1 for the
+/// heading; one much larger believes itself better than it is.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Consistency {
+    position: f64,
+    heading: f64,
+    heading_var: f64,
+    n: usize,
+}
+
+impl Consistency {
+    /// Takes one error `(x, y, θ)` with the filter's covariance of it;
+    /// a covariance that cannot be inverted is left out.
+    fn add(&mut self, error: &Vector3<f64>, cov: &Matrix3<f64>) {
+        let xy = cov.fixed_view::<2, 2>(0, 0).into_owned();
+        let (Some(inv), true) = (xy.try_inverse(), cov[(2, 2)] > 0.0) else {
+            return;
+        };
+        let d = error.fixed_rows::<2>(0).into_owned();
+        self.position += (d.transpose() * inv * d)[(0, 0)];
+        self.heading += error.z * error.z / cov[(2, 2)];
+        self.heading_var += cov[(2, 2)];
+        self.n += 1;
+    }
+
+    /// The figures for the report (`None` with no sample).
+    fn report(&self) -> Option<FilterConsistency> {
+        let n = (self.n > 0).then_some(self.n as f64)?;
+        Some(FilterConsistency {
+            position_nees: self.position / n,
+            heading_nees: self.heading / n,
+            heading_sigma_rms_rad: (self.heading_var / n).sqrt(),
+        })
+    }
 }
 
 impl Trace {
@@ -1148,11 +1203,16 @@ impl Trace {
         self.poses.1.push(*truth);
     }
 
-    fn errors(&mut self, est: &Pose2, truth: &Pose2) {
-        let e = (est.position() - truth.position()).norm();
+    /// Takes the error of `est` against `truth`, with the covariance the
+    /// filter gives `est` (the room frame is the world's, shifted).
+    fn errors(&mut self, est: &Pose2, truth: &Pose2, cov: &Matrix3<f64>) {
+        let d = est.position() - truth.position();
+        let e = d.norm();
         self.pos2 += e * e;
         self.pos_max = self.pos_max.max(e);
-        self.head2 += wrap_angle(est.theta - truth.theta).powi(2);
+        let h = wrap_angle(est.theta - truth.theta);
+        self.head2 += h * h;
+        self.consistency.add(&Vector3::new(d.x, d.y, h), cov);
         self.n += 1;
         if let Some(l) = self.last {
             self.length += (truth.position() - l.position()).norm();
@@ -1369,4 +1429,63 @@ fn score_windows(
         })
         .count();
     (reports, hit, truth.len())
+}
+
+#[cfg(test)]
+#[allow(clippy::expect_used)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    /// `n` errors drawn from the normal distribution of covariance `cov`.
+    fn errors(cov: &Matrix3<f64>, n: usize, seed: u64) -> Vec<Vector3<f64>> {
+        let l = cov.cholesky().expect("positive definite").l();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        (0..n)
+            .map(|_| {
+                let w = Vector3::from_fn(|_, _| StandardNormal.sample(&mut rng));
+                l * w
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_covariance_that_covers_its_errors_scores_its_degrees_of_freedom() {
+        // Position errors of 3 and 1 mm across each other, heading 0.5 mrad.
+        let cov = Matrix3::new(
+            9e-6, 2e-6, 0.0, //
+            2e-6, 1e-6, 0.0, //
+            0.0, 0.0, 2.5e-7,
+        );
+        let drawn = errors(&cov, 20_000, 7);
+        let mut honest = Consistency::default();
+        let mut proud = Consistency::default();
+        for e in &drawn {
+            honest.add(e, &cov);
+            proud.add(e, &(cov / 100.0));
+        }
+        let honest = honest.report().expect("samples");
+        assert!((honest.position_nees - 2.0).abs() < 0.1, "{honest:?}");
+        assert!((honest.heading_nees - 1.0).abs() < 0.05, "{honest:?}");
+        assert!((honest.heading_sigma_rms_rad - 5e-4).abs() < 1e-9);
+        // A filter ten times surer than it is scores a hundred times more.
+        let proud = proud.report().expect("samples");
+        assert!((proud.position_nees / honest.position_nees - 100.0).abs() < 1e-6);
+        assert!((proud.heading_nees / honest.heading_nees - 100.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_covariance_that_cannot_be_inverted_is_left_out() {
+        let mut c = Consistency::default();
+        c.add(&Vector3::new(0.01, 0.0, 0.0), &Matrix3::zeros());
+        assert_eq!(c.report(), None);
+        c.add(
+            &Vector3::new(0.001, 0.0, 0.0),
+            &Matrix3::from_diagonal_element(1e-6),
+        );
+        let r = c.report().expect("one sample");
+        assert!((r.position_nees - 1.0).abs() < 1e-9, "{r:?}");
+        assert_eq!(r.heading_nees, 0.0);
+    }
 }
