@@ -411,18 +411,21 @@ impl Navigator {
         &self.obstacles
     }
 
-    /// The covariance of the pose `(x, y, θ)`'s error now, room frame
-    /// (the walls' shared errors taken in).
-    pub fn pose_covariance(&self) -> nalgebra::Matrix3<f64> {
-        let p = self.room.ekf.error_covariance_now();
-        p.fixed_view::<3, 3>(0, 0).into_owned()
+    /// The pose now and the covariance of its error, room frame (the
+    /// walls' shared errors taken in): the estimate's pose without the
+    /// rest of it.
+    pub fn pose_with_covariance(&self) -> (Pose2, nalgebra::Matrix3<f64>) {
+        let (x, p) = self.room.ekf.estimate_now();
+        (
+            Pose2::new(x[0], x[1], x[2]),
+            p.fixed_view::<3, 3>(0, 0).into_owned(),
+        )
     }
 
     /// The estimate as the executive reads it, its spreads those of its
     /// error (the walls' shared errors taken in).
     pub fn mission_estimate(&self) -> Estimate {
-        let (x, _) = self.room.ekf.now();
-        let p = self.room.ekf.error_covariance_now();
+        let (x, p) = self.room.ekf.estimate_now();
         let xy = Matrix2::new(p[(0, 0)], p[(0, 1)], p[(1, 0)], p[(1, 1)]);
         let worst = xy.symmetric_eigenvalues().max().max(0.0);
         let doors = self

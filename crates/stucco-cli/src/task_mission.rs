@@ -916,11 +916,12 @@ fn run_once(
         }
         // The trace in the world frame: the estimate placed by the true
         // corner of the room it is kept in.
-        let (est_w, truth_w) = (frame.to_world(&nav.mission_estimate().pose), nav.truth());
+        let (pose, cov) = nav.pose_with_covariance();
+        let (est_w, truth_w) = (frame.to_world(&pose), nav.truth());
         if step.is_multiple_of(5) {
             trace.push(&est_w, &truth_w);
         }
-        trace.errors(&est_w, &truth_w, &nav.pose_covariance());
+        trace.errors(&est_w, &truth_w, &cov);
         step += 1;
         if step.is_multiple_of(50) {
             let task = exec.current_task().map_or("", |t| t.1);

@@ -24,7 +24,7 @@
 //! Beside it the filter carries the covariance of its error with that
 //! shared error taken in (a consider analysis of its own gains, as in a
 //! Schmidt–Kalman filter), and reports that one
-//! ([`RoomEkf::error_covariance_now`]).
+//! ([`RoomEkf::estimate_now`]).
 
 use crate::door::DoorOpening;
 use crate::odometry::{Displacement, OdometryConfig, turned_covariance};
@@ -69,7 +69,7 @@ pub struct RoomEkfConfig {
     /// after scan, and no number of scans averages it away. The filter's
     /// gains leave it out (they are tuned to pull the estimate onto the
     /// walls); the covariance it reports takes it in (see
-    /// [`RoomEkf::error_covariance_now`]).
+    /// [`RoomEkf::estimate_now`]).
     pub wall_bias_sigma: [f64; 2],
     /// Travel over which that shared error is forgotten, m: it falls by
     /// `exp(−travel / this − turn / wall_bias_turn_rad)`.
@@ -151,12 +151,26 @@ fn update(
     let nu = DVector::from_column_slice(m.nu.as_slice());
     *x += &k * nu;
     x[2] = wrap_angle(x[2]);
-    let n = x.len();
-    let i_kh = DMatrix::identity(n, n) - &k * h;
-    let r = DMatrix::from_column_slice(2, 2, r.as_slice());
-    let q = &i_kh * &*p * i_kh.transpose() + &k * r * k.transpose();
-    *p = 0.5 * (&q + q.transpose());
+    *p = joseph(p, &(DMatrix::identity(x.len(), x.len()) - &k * h), &k, r);
     k
+}
+
+/// `A P Aᵀ + K R Kᵀ`, symmetric: the covariance after an update of gain
+/// `K` (`A = I − KH`) by an observation of error `R`, whatever the gain.
+fn joseph(p: &DMatrix<f64>, a: &DMatrix<f64>, k: &DMatrix<f64>, r: &Matrix2<f64>) -> DMatrix<f64> {
+    let r = DMatrix::from_column_slice(2, 2, r.as_slice());
+    let q = a * p * a.transpose() + k * r * k.transpose();
+    0.5 * (&q + q.transpose())
+}
+
+/// `p` with one more row and column, the new one of variance `variance`
+/// and uncorrelated.
+fn padded(p: &DMatrix<f64>, variance: f64) -> DMatrix<f64> {
+    let n = p.nrows();
+    let mut out = DMatrix::zeros(n + 1, n + 1);
+    out.view_mut((0, 0), (n, n)).copy_from(p);
+    out[(n, n)] = variance;
+    out
 }
 
 /// The covariance of the filter's error when its observations of walls
@@ -189,15 +203,13 @@ impl ErrorCovariance {
         let n = self.p.nrows();
         let a = DMatrix::identity(n, n) - k * h;
         let c = self.cross.columns(2 * q, 2).into_owned();
-        let b = DMatrix::from_column_slice(2, 2, shared.as_slice());
-        let r = DMatrix::from_column_slice(2, 2, r.as_slice());
+        // The shared error counts as the scan's own in the Joseph form,
+        // less its covariance with the state's error before the update.
         let akc = &a * &c * k.transpose();
-        let p =
-            &a * &self.p * a.transpose() - &akc - akc.transpose() + k * (&b + r) * k.transpose();
-        self.p = 0.5 * (&p + p.transpose());
+        self.p = joseph(&self.p, &a, k, &(r + shared)) - &akc - akc.transpose();
         self.cross = &a * &self.cross;
         let mut own = self.cross.columns_mut(2 * q, 2);
-        own -= k * b;
+        own -= k * DMatrix::from_column_slice(2, 2, shared.as_slice());
     }
 
     /// Takes in an update of gain `k` by an observation `h` with error `r`
@@ -205,9 +217,7 @@ impl ErrorCovariance {
     fn own_update(&mut self, h: &DMatrix<f64>, k: &DMatrix<f64>, r: &Matrix2<f64>) {
         let n = self.p.nrows();
         let a = DMatrix::identity(n, n) - k * h;
-        let r = DMatrix::from_column_slice(2, 2, r.as_slice());
-        let p = &a * &self.p * a.transpose() + k * r * k.transpose();
-        self.p = 0.5 * (&p + p.transpose());
+        self.p = joseph(&self.p, &a, k, r);
         self.cross = &a * &self.cross;
     }
 }
@@ -259,14 +269,8 @@ impl RoomEkf {
     pub fn add_door(&mut self, wall: usize, position_m: f64, sigma_m: f64) -> RoomDoor {
         let n = self.x.len();
         self.x = self.x.clone().insert_row(n, position_m);
-        let mut p = DMatrix::zeros(n + 1, n + 1);
-        p.view_mut((0, 0), (n, n)).copy_from(&self.p);
-        p[(n, n)] = sigma_m * sigma_m;
-        self.p = p;
-        let mut e = DMatrix::zeros(n + 1, n + 1);
-        e.view_mut((0, 0), (n, n)).copy_from(&self.error.p);
-        e[(n, n)] = sigma_m * sigma_m;
-        self.error.p = e;
+        self.p = padded(&self.p, sigma_m * sigma_m);
+        self.error.p = padded(&self.error.p, sigma_m * sigma_m);
         self.error.cross = self.error.cross.clone().insert_row(n, 0.0);
         let door = RoomDoor { wall, index: n };
         self.doors.push(door);
@@ -294,13 +298,13 @@ impl RoomEkf {
         predict(&self.x, &self.p, &d)
     }
 
-    /// The covariance of the estimate's error now, the walls' shared
-    /// errors taken in: what the estimate of [`RoomEkf::now`] is worth.
-    /// The covariance `now` returns is the one the gains are made of, and
-    /// believes scan after scan of one wall to be independent.
-    pub fn error_covariance_now(&self) -> DMatrix<f64> {
+    /// The estimate now with the covariance of its error, the walls'
+    /// shared errors taken in: what the robot acts on. (The covariance
+    /// [`RoomEkf::now`] returns is the one the gains are made of, and takes
+    /// scan after scan of one wall for independent looks.)
+    pub fn estimate_now(&self) -> (DVector<f64>, DMatrix<f64>) {
         let d = self.displacement(self.pending.len(), None);
-        predict(&self.x, &self.error.p, &d).1
+        predict(&self.x, &self.error.p, &d)
     }
 
     /// How much of the walls' shared errors outlasts the motion `d`.
@@ -785,7 +789,7 @@ mod tests {
             let (x, p) = ekf.now();
             let mut e = x - &t;
             e[2] = wrap_angle(e[2]);
-            error_nees += nees(&e, &ekf.error_covariance_now());
+            error_nees += nees(&e, &ekf.estimate_now().1);
             gain_nees += nees(&e, &p);
         }
         (error_nees / runs as f64, gain_nees / runs as f64)

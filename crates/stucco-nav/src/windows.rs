@@ -111,14 +111,17 @@ impl Window {
     /// inverse of its variance, and its passes; sill and head stay.
     pub fn fuse_edges(&mut self, other: &Window) {
         for k in 0..2 {
-            let (a, b) = (
-                self.along_sigma_m[k].powi(-2),
-                other.along_sigma_m[k].powi(-2),
-            );
-            self.along_m[k] = (a * self.along_m[k] + b * other.along_m[k]) / (a + b);
-            self.along_sigma_m[k] = (a + b).sqrt().recip();
+            self.fuse_edge(k, other.along_m[k], other.along_sigma_m[k]);
         }
         self.observations += other.observations;
+    }
+
+    /// Takes edge `k` seen at `along_m`, `sigma_m` uncertain, into this
+    /// window's, each weighed by the inverse of its variance.
+    fn fuse_edge(&mut self, k: usize, along_m: f64, sigma_m: f64) {
+        let (a, b) = (self.along_sigma_m[k].powi(-2), sigma_m.powi(-2));
+        self.along_m[k] = (a * self.along_m[k] + b * along_m) / (a + b);
+        self.along_sigma_m[k] = (a + b).sqrt().recip();
     }
 
     /// True when the two share more than a border: one window seen twice.
@@ -314,9 +317,7 @@ impl WindowFinder {
                     <= EDGE_GATE_SIGMAS * w.along_sigma_m[k].hypot(e.sigma_m)
         });
         if let Some(w) = known {
-            let (a, b) = (w.along_sigma_m[k].powi(-2), e.sigma_m.powi(-2));
-            w.along_m[k] = (a * w.along_m[k] + b * e.along_m) / (a + b);
-            w.along_sigma_m[k] = (a + b).sqrt().recip();
+            w.fuse_edge(k, e.along_m, e.sigma_m);
         }
     }
 
