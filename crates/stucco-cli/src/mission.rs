@@ -491,14 +491,16 @@ impl Mission {
     /// The executive for the mission's tasks, its failsafe, the simulated
     /// robot; `unattended` when no operator is there to answer.
     pub fn executive(&self, unattended: bool) -> Executive {
+        let robot = SimConfig::default();
         Executive::new(
             ExecutiveConfig {
-                vehicle: SimConfig::default().vehicle,
+                vehicle: robot.vehicle,
                 gains: GainSchedule::default(),
                 safety: self.failsafe.clone(),
                 unattended,
                 spray: self.spray.clone(),
                 floor: self.floor_plan(),
+                body_camera_azimuth_rad: robot.camera.map(|c| c.azimuth_rad),
             },
             self.tasks.clone(),
         )

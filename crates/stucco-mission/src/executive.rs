@@ -378,6 +378,11 @@ pub struct ExecutiveConfig {
     /// The building's rooms and doors, for `go_to_room` (and for
     /// `pass_door` to move the frame into the next room).
     pub floor: Option<FloorPlan>,
+    /// Heading of the fan of the range camera on the robot's body in the
+    /// robot's frame, rad (π/2: to the left), as the camera's profiles
+    /// carry it; `None`: the body has no camera, and a plastering survey
+    /// makes no looks at the window edges it bracketed loosely.
+    pub body_camera_azimuth_rad: Option<f64>,
 }
 
 /// The mission's progress as a checkpoint keeps it.
@@ -2382,20 +2387,20 @@ const LOOK_REACH_M: f64 = 0.08;
 /// is made at, rad (the window finder takes profiles to 25°).
 const LOOK_INCIDENCE_RAD: f64 = 0.26;
 
-/// The body's camera looks out of the robot's left side from the rear
-/// axle (as the survey's clockwise loop has it).
-const BODY_CAMERA_AZIMUTH_RAD: f64 = std::f64::consts::FRAC_PI_2;
-
 /// The looks at the window edges `est` knows loosely (not doors): for each, the way to
 /// a place the robot can stand and turn, from which the body's camera
 /// meets the edge squarely enough, and a slow turn sweeping the camera's
 /// fan across it. Each with the wall, the edge and its spread. An edge no
-/// clear way leads to a place for is left as it is.
+/// clear way leads to a place for is left as it is; a body without a
+/// camera makes none.
 fn edge_looks(
     config: &ExecutiveConfig,
     est: &Estimate,
     speed: f64,
 ) -> Vec<(WallName, f64, f64, Vec<Behaviour>)> {
+    let Some(camera_azimuth) = config.body_camera_azimuth_rad else {
+        return Vec::new();
+    };
     let space = estimate_space(config, est, speed);
     let mut from = est.pose;
     let mut out = Vec::new();
@@ -2430,7 +2435,7 @@ fn edge_looks(
                 if !(d > 0.3 && incidence <= LOOK_INCIDENCE_RAD) {
                     return None;
                 }
-                let aim = to_edge.y.atan2(to_edge.x) - BODY_CAMERA_AZIMUTH_RAD;
+                let aim = to_edge.y.atan2(to_edge.x) - camera_azimuth;
                 let reach = (LOOK_REACH_M.max(3.0 * sigma) / across).atan();
                 let start = Pose2::new(at.x, at.y, aim - reach);
                 let end = Pose2::new(at.x, at.y, aim + reach);

@@ -165,6 +165,7 @@ fn config(unattended: bool) -> ExecutiveConfig {
         unattended,
         spray: None,
         floor: None,
+        body_camera_azimuth_rad: Some(std::f64::consts::FRAC_PI_2),
     }
 }
 
@@ -677,6 +678,7 @@ fn the_operator_has_one_surface_plastered() {
             unattended: false,
             spray: Some(stucco_plan::SprayTool::default()),
             floor: None,
+            body_camera_azimuth_rad: Some(std::f64::consts::FRAC_PI_2),
         },
         vec![TaskSpec::WaitForOperator {
             prompt: "standing by".to_owned(),
@@ -962,6 +964,7 @@ fn a_lost_link_stops_a_jog_and_pauses_by_default() {
                 unattended: false,
                 spray: None,
                 floor: None,
+                body_camera_azimuth_rad: Some(std::f64::consts::FRAC_PI_2),
             },
             vec![forward(2.0)],
         );
@@ -1101,11 +1104,16 @@ fn plaster_finding_a_window(camera: bool) -> WindowRun {
 
 /// A plastering survey of the 5 × 3 m room knowing a window in its north
 /// wall, 1.8-3.0 m along, its far edge `far_sigma_m` uncertain (and a
-/// door in its south wall as loose); up to the plan made again after it.
-/// The events, and each tick's pose.
-fn survey_knowing_a_window(far_sigma_m: f64) -> (Vec<Event>, Vec<Pose2>) {
+/// door in its south wall as loose), by a robot whose body camera looks
+/// out at `camera_azimuth_rad` (or that has none); up to the plan made
+/// again after it. The events, and each tick's pose.
+fn survey_knowing_a_window(
+    far_sigma_m: f64,
+    camera_azimuth_rad: Option<f64>,
+) -> (Vec<Event>, Vec<Pose2>) {
     let mut cfg = config(true);
     cfg.spray = Some(stucco_plan::SprayTool::default());
+    cfg.body_camera_azimuth_rad = camera_azimuth_rad;
     let mut exec = Executive::new(cfg, vec![plaster(true)]);
     let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
     robot.windows.push(WindowEstimate {
@@ -1143,14 +1151,9 @@ fn survey_knowing_a_window(far_sigma_m: f64) -> (Vec<Event>, Vec<Pose2>) {
     (events, poses)
 }
 
-/// An edge the survey's camera bracketed loosely is looked at again before
-/// the plan is made: the body's camera (looking left) swept slowly across
-/// it, meeting the wall within 25° of square, a profile a centimetre or
-/// less apart at 20 a second. Edges known well are not.
-#[test]
-fn a_window_edge_known_loosely_is_swept_slowly_before_the_plan_is_made() {
-    let (events, poses) = survey_knowing_a_window(0.02);
-    let looks: Vec<_> = events
+/// The looks a survey made: wall, edge and its spread.
+fn edge_looks(events: &[Event]) -> Vec<(WallName, f64, f64)> {
+    events
         .iter()
         .filter_map(|e| match e.kind {
             EventKind::WindowEdgeLook {
@@ -1161,30 +1164,53 @@ fn a_window_edge_known_loosely_is_swept_slowly_before_the_plan_is_made() {
             } => Some((wall, along_m, sigma_m)),
             _ => None,
         })
-        .collect();
-    assert_eq!(looks, vec![(WallName::North, 3.0, 0.02)]);
-    assert!(
-        slow_crossings(&poses) >= 1,
-        "the fan never swept the edge slowly"
-    );
-    let (events, poses) = survey_knowing_a_window(0.005);
-    assert!(
-        !events
-            .iter()
-            .any(|e| matches!(e.kind, EventKind::WindowEdgeLook { .. })),
-        "{:?}",
-        kinds(&events)
-    );
-    assert_eq!(slow_crossings(&poses), 0);
+        .collect()
 }
 
-/// Ticks in which the body camera's fan (looking left) passed the far
+/// An edge the survey's camera bracketed loosely is looked at again before
+/// the plan is made: the body's camera (looking left) swept slowly across
+/// it, meeting the wall within 25° of square, a profile a centimetre or
+/// less apart at 20 a second. Edges known well are not.
+#[test]
+fn a_window_edge_known_loosely_is_swept_slowly_before_the_plan_is_made() {
+    let left = std::f64::consts::FRAC_PI_2;
+    let (events, poses) = survey_knowing_a_window(0.02, Some(left));
+    assert_eq!(edge_looks(&events), vec![(WallName::North, 3.0, 0.02)]);
+    assert!(
+        slow_crossings(&poses, left) >= 1,
+        "the fan never swept the edge slowly"
+    );
+    let (events, poses) = survey_knowing_a_window(0.005, Some(left));
+    assert!(edge_looks(&events).is_empty(), "{:?}", kinds(&events));
+    assert_eq!(slow_crossings(&poses, left), 0);
+}
+
+/// The look is made with the body's camera where the robot carries it: a
+/// camera looking right sweeps the edge with its own fan, and a body
+/// without a camera makes no look.
+#[test]
+fn a_window_edge_is_looked_at_with_the_camera_the_body_carries() {
+    let (left, right) = (std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2);
+    let (events, poses) = survey_knowing_a_window(0.02, Some(right));
+    assert_eq!(edge_looks(&events), vec![(WallName::North, 3.0, 0.02)]);
+    assert!(
+        slow_crossings(&poses, right) >= 1,
+        "the right-looking fan never swept the edge slowly"
+    );
+    assert_eq!(slow_crossings(&poses, left), 0);
+    let (events, poses) = survey_knowing_a_window(0.02, None);
+    assert!(edge_looks(&events).is_empty(), "{:?}", kinds(&events));
+    assert_eq!(slow_crossings(&poses, right), 0);
+    assert_eq!(slow_crossings(&poses, left), 0);
+}
+
+/// Ticks in which a body camera's fan at `azimuth_rad` passed the far
 /// edge of [`survey_knowing_a_window`]'s window meeting the wall within
 /// 25° of square, sweeping along it at 0.2 m/s or slower.
-fn slow_crossings(poses: &[Pose2]) -> usize {
+fn slow_crossings(poses: &[Pose2], azimuth_rad: f64) -> usize {
     let g = WallGeometry::of(WallName::North, ROOM);
     let edge = g.origin + g.along * 3.0;
-    let fan = |p: &Pose2| p.theta + std::f64::consts::FRAC_PI_2;
+    let fan = |p: &Pose2| p.theta + azimuth_rad;
     poses
         .windows(2)
         .filter(|pair| {
@@ -1309,6 +1335,7 @@ fn a_plaster_task_sprays_every_pass_and_resumes_mid_stroke() {
                 unattended: true,
                 spray: Some(tool.clone()),
                 floor: None,
+                body_camera_azimuth_rad: Some(std::f64::consts::FRAC_PI_2),
             },
             vec![plaster(false)],
         )
