@@ -343,3 +343,28 @@ fn a_recorded_run_replays_to_the_same_commands() {
     assert!(r.ticks > 100, "{r:?}");
     assert_eq!(r.identical, r.ticks, "{r:?}");
 }
+
+/// A recording keeps the building plan its mission was run with: it
+/// replays to the same commands after the mission and plan files are
+/// gone.
+#[test]
+fn a_recording_keeps_the_plan_its_mission_ran_with() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let world = root.join("sim/worlds/floor.toml").canonicalize().unwrap();
+    let text = std::fs::read_to_string(mission("two-offices"))
+        .unwrap()
+        .replace("../sim/worlds/floor.toml", &world.display().to_string())
+        .replace("plans/office-floor.toml", "plan.toml");
+    let (path, plan) = (dir.path().join("job.toml"), dir.path().join("plan.toml"));
+    std::fs::write(&path, &text).unwrap();
+    std::fs::copy(root.join("missions/plans/office-floor.toml"), &plan).unwrap();
+    let out = dir.path().join("out");
+    job(&path, Some(&out), false, Some(10.0), true).unwrap();
+    std::fs::remove_file(&plan).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let r = stucco_cli::replay_run(&out.join("run.mcap")).unwrap();
+    assert_eq!(r.mission, "two offices");
+    assert!(r.ticks > 400, "{r:?}");
+    assert_eq!(r.identical, r.ticks, "{r:?}");
+}

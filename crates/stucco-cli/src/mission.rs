@@ -73,6 +73,12 @@ pub struct Mission {
     /// The plan of `rooms` and `doors`, checked once at load.
     #[serde(skip)]
     floor: Option<FloorPlan>,
+    /// The mission file's text as it was parsed.
+    #[serde(skip)]
+    text: String,
+    /// The text of the plan file it names, as it was parsed.
+    #[serde(skip)]
+    plan_text: Option<String>,
     /// A task mission fails when it takes longer than this, simulated s.
     #[serde(default = "time_limit")]
     pub time_limit_s: f64,
@@ -217,6 +223,13 @@ impl Mission {
     /// Parses and checks the text of a mission file (`path` names it in
     /// errors).
     pub fn parse(text: &str, path: &Path) -> Result<Mission> {
+        Self::parse_with_plan(text, path, None)
+    }
+
+    /// As [`Mission::parse`], the text of the plan file the mission names
+    /// given (as a recording keeps it) instead of read from the disk;
+    /// `None`: read it.
+    pub fn parse_with_plan(text: &str, path: &Path, plan_text: Option<&str>) -> Result<Mission> {
         let text = text.to_owned();
         let mut mission: Mission = parse_toml(&text, path)?;
         // The plan's own file, when it has one: its faults are named there.
@@ -229,14 +242,17 @@ impl Mission {
             ),
             Some(file) => {
                 let plan_path = path.parent().map_or_else(|| file.clone(), |d| d.join(file));
-                let plan_text = std::fs::read_to_string(&plan_path).map_err(|e| {
-                    BadInput(format!(
-                        "{}:{}: plan: cannot read {}: {e}",
-                        path.display(),
-                        line_of(&text, "", "plan"),
-                        plan_path.display()
-                    ))
-                })?;
+                let plan_text = match plan_text {
+                    Some(given) => given.to_owned(),
+                    None => std::fs::read_to_string(&plan_path).map_err(|e| {
+                        BadInput(format!(
+                            "{}:{}: plan: cannot read {}: {e}",
+                            path.display(),
+                            line_of(&text, "", "plan"),
+                            plan_path.display()
+                        ))
+                    })?,
+                };
                 let drawn: PlanFile = parse_toml(&plan_text, &plan_path)?;
                 mission.rooms = drawn.rooms;
                 mission.doors = drawn.doors;
@@ -348,7 +364,32 @@ impl Mission {
                 );
             }
         }
+        mission.plan_text = plan_file.map(|(plan_text, _)| plan_text);
+        mission.text = text;
         Ok(mission)
+    }
+
+    /// The mission file's text, as the mission was parsed from it.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// The text of the plan file it names, as the mission was parsed from
+    /// it.
+    pub fn plan_text(&self) -> Option<&str> {
+        self.plan_text.as_deref()
+    }
+
+    /// What a checkpoint must have been made with: the mission file's text
+    /// and, when it names one, its plan file's (door numbers in a
+    /// checkpoint are the plan's), each as the mission was parsed from it
+    /// (a mission deserialized otherwise than by [`Mission::parse`] has
+    /// none).
+    pub fn fingerprint(&self) -> String {
+        match &self.plan_text {
+            Some(plan) => format!("{}\n{plan}", self.text),
+            None => self.text.clone(),
+        }
     }
 
     /// The floor plan, checked (a door must lie in a wall of each of its

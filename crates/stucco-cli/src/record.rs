@@ -2,8 +2,8 @@
 //! replaying a recording through the executive.
 //!
 //! Every message is JSON. Topics:
-//! - `/mission`: the mission file's text, the seed, the checkpoint resumed
-//!   from (once, first);
+//! - `/mission`: the mission file's text and its plan file's, the seed,
+//!   the checkpoint resumed from (once, first);
 //! - `/executive/inputs`: what the executive read each tick (the estimate,
 //!   bumper, e-stop, operator commands, which scan's echoes);
 //! - `/scan/points`: the echoes of each new scan, robot frame;
@@ -35,6 +35,10 @@ pub struct RecordedMission {
     pub path: String,
     /// Its text.
     pub text: String,
+    /// The text of the plan file it names (a recording replays without
+    /// the files it was made from).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan_text: Option<String>,
     /// The run's seed.
     pub seed: u64,
     /// The progress the run resumed from.
@@ -234,7 +238,8 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
             "/mission" => {
                 let r: RecordedMission =
                     serde_json::from_slice(&m.data).map_err(|_| json("/mission"))?;
-                let mission = Mission::parse(&r.text, Path::new(&r.path))?;
+                let mission =
+                    Mission::parse_with_plan(&r.text, Path::new(&r.path), r.plan_text.as_deref())?;
                 name = mission.name.clone();
                 let mut e = mission.executive(true);
                 if let Some(p) = &r.resumed_from {

@@ -311,8 +311,8 @@ pub struct MissionSummary {
 pub struct Checkpoint {
     /// The mission's name.
     pub mission: String,
-    /// Digest of the mission file's text: a checkpoint of another version
-    /// is refused.
+    /// Digest of the mission file's text and its plan file's: a checkpoint
+    /// of another version of either is refused.
     pub digest: String,
     /// The seed of the run.
     pub seed: u64,
@@ -354,10 +354,11 @@ pub struct RoomMap {
     pub windows: Vec<(WallName, stucco_nav::Window)>,
 }
 
-/// FNV-1a digest of a mission file's text.
-fn digest(text: &str) -> String {
+/// FNV-1a digest of what a checkpoint of `mission` must have been made
+/// with ([`Mission::fingerprint`]).
+fn digest(mission: &Mission) -> String {
     let mut h = fnv::FnvHasher::default();
-    h.write(text.as_bytes());
+    h.write(mission.fingerprint().as_bytes());
     format!("fnv1a64:{:016x}", h.finish())
 }
 
@@ -384,9 +385,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
-/// Reads the checkpoint at `path` for `mission` (its text `text`), or
-/// says why it cannot be used — leaving the file as it is.
-fn read_checkpoint(path: &Path, mission: &Mission, text: &str) -> Result<Checkpoint> {
+/// Reads the checkpoint at `path` for `mission`, or says why it cannot be
+/// used — leaving the file as it is.
+fn read_checkpoint(path: &Path, mission: &Mission) -> Result<Checkpoint> {
     let raw = std::fs::read_to_string(path).map_err(|e| {
         BadInput(format!(
             "{}: cannot read the checkpoint: {e}",
@@ -401,14 +402,15 @@ fn read_checkpoint(path: &Path, mission: &Mission, text: &str) -> Result<Checkpo
             e.column()
         ))
     })?;
-    if cp.mission != mission.name || cp.digest != digest(text) {
+    let digest = digest(mission);
+    if cp.mission != mission.name || cp.digest != digest {
         return Err(BadInput(format!(
             "{}: the checkpoint was written for mission {:?} ({}), not this file ({:?}, {}); it is left as it is",
             path.display(),
             cp.mission,
             cp.digest,
             mission.name,
-            digest(text)
+            digest
         ))
         .into());
     }
@@ -422,8 +424,6 @@ pub fn run_task_mission(
     progress: &(dyn Fn(f64, &str) + Sync),
 ) -> Result<MissionSummary> {
     let mission = Mission::load(&job.mission)?;
-    let text = std::fs::read_to_string(&job.mission)
-        .with_context(|| format!("cannot read {}", job.mission.display()))?;
     if mission.tasks.is_empty() {
         return Err(BadInput(format!("{}: no [[task]] in it", job.mission.display())).into());
     }
@@ -441,26 +441,12 @@ pub fn run_task_mission(
         )
         .into());
     }
-    // What a checkpoint must have been made with: the mission file and the
-    // building plan it names (door numbers in the checkpoint are the plan's).
-    let fingerprint = match &mission.plan {
-        Some(file) => {
-            let path = job
-                .mission
-                .parent()
-                .map_or_else(|| file.clone(), |d| d.join(file));
-            let plan = std::fs::read_to_string(&path)
-                .with_context(|| format!("cannot read {}", path.display()))?;
-            format!("{text}\n{plan}")
-        }
-        None => text.clone(),
-    };
     let mut seed = job.seed.unwrap_or(mission.seed);
     let mut resume = None;
     if job.resume
         && let Some(dir) = &job.out
     {
-        let cp = read_checkpoint(&dir.join("checkpoint.json"), &mission, &fingerprint)?;
+        let cp = read_checkpoint(&dir.join("checkpoint.json"), &mission)?;
         seed = job.seed.unwrap_or(cp.seed);
         resume = Some(cp);
     }
@@ -468,8 +454,6 @@ pub fn run_task_mission(
         mission: &mission,
         mission_path: &job.mission,
         record: job.record,
-        text: &text,
-        fingerprint: &fingerprint,
         world: &world,
         resume: resume.as_ref(),
         stop_after: job.stop_after_s,
@@ -590,11 +574,6 @@ struct Setup<'a> {
     mission_path: &'a Path,
     /// Record each run to `run.mcap`.
     record: bool,
-    /// The mission file's text (for the recording).
-    text: &'a str,
-    /// The mission file's and its plan's text (for the checkpoint's
-    /// digest).
-    fingerprint: &'a str,
     world: &'a WorldSpec,
     resume: Option<&'a Checkpoint>,
     stop_after: Option<f64>,
@@ -611,8 +590,6 @@ fn run_once(
         mission,
         mission_path,
         record,
-        text,
-        fingerprint,
         world,
         resume,
         stop_after,
@@ -711,7 +688,7 @@ fn run_once(
                 .collect();
             let cp = Checkpoint {
                 mission: mission.name.clone(),
-                digest: digest(fingerprint),
+                digest: digest(mission),
                 seed,
                 progress,
                 map: RoomMap {
@@ -758,7 +735,8 @@ fn run_once(
             &dir.join("run.mcap"),
             &RecordedMission {
                 path: mission_path.display().to_string(),
-                text: text.to_owned(),
+                text: mission.text().to_owned(),
+                plan_text: mission.plan_text().map(str::to_owned),
                 seed,
                 resumed_from: resume.map(|cp| cp.progress.clone()),
             },

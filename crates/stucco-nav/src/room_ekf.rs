@@ -206,7 +206,7 @@ impl ErrorCovariance {
         // The shared error counts as the scan's own in the Joseph form,
         // less its covariance with the state's error before the update.
         let akc = &a * &c * k.transpose();
-        self.p = joseph(&self.p, &a, k, &(r + shared)) - &akc - akc.transpose();
+        self.p = joseph(&self.p, &a, k, &(r + shared)) - (&akc + akc.transpose());
         self.cross = &a * &self.cross;
         let mut own = self.cross.columns_mut(2 * q, 2);
         own -= k * DMatrix::from_column_slice(2, 2, shared.as_slice());
