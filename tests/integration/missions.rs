@@ -344,6 +344,39 @@ fn a_recorded_run_replays_to_the_same_commands() {
     assert_eq!(r.identical, r.ticks, "{r:?}");
 }
 
+/// A recording whose plan is not a plan is refused, the fault named in
+/// the recording's copy of the plan by line and key.
+#[test]
+fn a_recording_with_a_bad_plan_names_the_recorded_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let text = std::fs::read_to_string(mission("two-offices")).unwrap();
+    let drawn = std::fs::read_to_string(root.join("missions/plans/office-floor.toml")).unwrap();
+    let bad = drawn.replacen("width_m = 1.1", "width_m = \"wide\"", 1);
+    let line = bad.lines().position(|l| l.contains("\"wide\"")).unwrap() + 1;
+    let path = dir.path().join("run.mcap");
+    stucco_cli::Recorder::create(
+        &path,
+        &stucco_cli::RecordedMission {
+            path: mission("two-offices").display().to_string(),
+            text,
+            plan_text: Some(bad),
+            seed: 21,
+            resumed_from: None,
+        },
+    )
+    .unwrap()
+    .finish()
+    .unwrap();
+    let err = format!("{:#}", stucco_cli::replay_run(&path).unwrap_err());
+    assert!(
+        err.contains(&format!("office-floor.toml (as recorded):{line}:")),
+        "{err}"
+    );
+    assert!(err.contains("width_m"), "{err}");
+    assert!(err.contains("run.mcap: /mission: "), "{err}");
+}
+
 /// A recording keeps the building plan its mission was run with: it
 /// replays to the same commands after the mission and plan files are
 /// gone.

@@ -242,16 +242,23 @@ impl Mission {
             ),
             Some(file) => {
                 let plan_path = path.parent().map_or_else(|| file.clone(), |d| d.join(file));
-                let plan_text = match plan_text {
-                    Some(given) => given.to_owned(),
-                    None => std::fs::read_to_string(&plan_path).map_err(|e| {
-                        BadInput(format!(
-                            "{}:{}: plan: cannot read {}: {e}",
-                            path.display(),
-                            line_of(&text, "", "plan"),
-                            plan_path.display()
-                        ))
-                    })?,
+                // A plan given is named as the copy it is in errors.
+                let (plan_text, plan_path) = match plan_text {
+                    Some(given) => (
+                        given.to_owned(),
+                        PathBuf::from(format!("{} (as recorded)", plan_path.display())),
+                    ),
+                    None => (
+                        std::fs::read_to_string(&plan_path).map_err(|e| {
+                            BadInput(format!(
+                                "{}:{}: plan: cannot read {}: {e}",
+                                path.display(),
+                                line_of(&text, "", "plan"),
+                                plan_path.display()
+                            ))
+                        })?,
+                        plan_path,
+                    ),
                 };
                 let drawn: PlanFile = parse_toml(&plan_text, &plan_path)?;
                 mission.rooms = drawn.rooms;
@@ -378,18 +385,6 @@ impl Mission {
     /// it.
     pub fn plan_text(&self) -> Option<&str> {
         self.plan_text.as_deref()
-    }
-
-    /// What a checkpoint must have been made with: the mission file's text
-    /// and, when it names one, its plan file's (door numbers in a
-    /// checkpoint are the plan's), each as the mission was parsed from it
-    /// (a mission deserialized otherwise than by [`Mission::parse`] has
-    /// none).
-    pub fn fingerprint(&self) -> String {
-        match &self.plan_text {
-            Some(plan) => format!("{}\n{plan}", self.text),
-            None => self.text.clone(),
-        }
     }
 
     /// The floor plan, checked (a door must lie in a wall of each of its

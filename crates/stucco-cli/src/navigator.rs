@@ -411,21 +411,17 @@ impl Navigator {
         &self.obstacles
     }
 
-    /// The pose now and the covariance of its error, room frame (the
-    /// walls' shared errors taken in): the estimate's pose without the
-    /// rest of it.
-    pub fn pose_with_covariance(&self) -> (Pose2, nalgebra::Matrix3<f64>) {
-        let (x, p) = self.room.ekf.estimate_now();
-        (
-            Pose2::new(x[0], x[1], x[2]),
-            p.fixed_view::<3, 3>(0, 0).into_owned(),
-        )
-    }
-
     /// The estimate as the executive reads it, its spreads those of its
     /// error (the walls' shared errors taken in).
     pub fn mission_estimate(&self) -> Estimate {
+        self.mission_estimate_with_covariance().0
+    }
+
+    /// [`Navigator::mission_estimate`] with the covariance of its pose's
+    /// error `(x, y, θ)`, room frame, from the one prediction to now.
+    pub fn mission_estimate_with_covariance(&self) -> (Estimate, nalgebra::Matrix3<f64>) {
         let (x, p) = self.room.ekf.estimate_now();
+        let pose_covariance = p.fixed_view::<3, 3>(0, 0).into_owned();
         let xy = Matrix2::new(p[(0, 0)], p[(0, 1)], p[(1, 0)], p[(1, 1)]);
         let worst = xy.symmetric_eigenvalues().max().max(0.0);
         let doors = self
@@ -444,7 +440,7 @@ impl Navigator {
                 })
             })
             .collect();
-        Estimate {
+        let estimate = Estimate {
             stamp: self.sim.now(),
             pose: Pose2::new(x[0], x[1], x[2]),
             position_sigma_m: worst.sqrt(),
@@ -467,7 +463,8 @@ impl Navigator {
                 .collect(),
             obstacles: self.room.floor_boxes.clone(),
             room: self.plan.as_ref().map(|(_, room, _)| *room),
-        }
+        };
+        (estimate, pose_covariance)
     }
 
     /// The filter's estimate now.

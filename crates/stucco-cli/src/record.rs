@@ -239,7 +239,8 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                 let r: RecordedMission =
                     serde_json::from_slice(&m.data).map_err(|_| json("/mission"))?;
                 let mission =
-                    Mission::parse_with_plan(&r.text, Path::new(&r.path), r.plan_text.as_deref())?;
+                    Mission::parse_with_plan(&r.text, Path::new(&r.path), r.plan_text.as_deref())
+                        .map_err(|e| bad(format!("/mission: {e:#}")))?;
                 name = mission.name.clone();
                 let mut e = mission.executive(true);
                 if let Some(p) = &r.resumed_from {

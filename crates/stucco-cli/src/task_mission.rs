@@ -355,10 +355,16 @@ pub struct RoomMap {
 }
 
 /// FNV-1a digest of what a checkpoint of `mission` must have been made
-/// with ([`Mission::fingerprint`]).
+/// with: the mission file's text and, when it names one, its plan file's
+/// (door numbers in a checkpoint are the plan's), each as the mission was
+/// parsed from it, a newline between.
 fn digest(mission: &Mission) -> String {
     let mut h = fnv::FnvHasher::default();
-    h.write(mission.fingerprint().as_bytes());
+    h.write(mission.text().as_bytes());
+    if let Some(plan) = mission.plan_text() {
+        h.write(b"\n");
+        h.write(plan.as_bytes());
+    }
     format!("fnv1a64:{:016x}", h.finish())
 }
 
@@ -768,9 +774,11 @@ fn run_once(
             );
         }
     }
+    // The estimate now, read once per control period: before the first
+    // tick, then after each step of the robot.
+    let mut est = nav.mission_estimate();
     loop {
         let now = nav.now();
-        let est = nav.mission_estimate();
         let inputs = Inputs {
             estimate: &est,
             obstacles: nav.obstacles(),
@@ -824,9 +832,7 @@ fn run_once(
             .map(|p| p.task)
             .filter(|t| !plans.contains_key(t));
         if let (Some(task), Some(plan)) = (made.or(taken_up), exec.plaster_plan()) {
-            let start = plans
-                .get(&task)
-                .map_or(nav.mission_estimate().pose, |p| p.2);
+            let start = plans.get(&task).map_or(est.pose, |p| p.2);
             plans.insert(task, (frame.clone(), plan.clone(), start));
             if let Some(dir) = out {
                 let kept: Vec<PlasteredRoom> = plans
@@ -894,12 +900,13 @@ fn run_once(
         }
         // The trace in the world frame: the estimate placed by the true
         // corner of the room it is kept in.
-        let (pose, cov) = nav.pose_with_covariance();
-        let (est_w, truth_w) = (frame.to_world(&pose), nav.truth());
+        let (next, pose_covariance) = nav.mission_estimate_with_covariance();
+        est = next;
+        let (est_w, truth_w) = (frame.to_world(&est.pose), nav.truth());
         if step.is_multiple_of(5) {
             trace.push(&est_w, &truth_w);
         }
-        trace.errors(&est_w, &truth_w, &cov);
+        trace.errors(&est_w, &truth_w, &pose_covariance);
         step += 1;
         if step.is_multiple_of(50) {
             let task = exec.current_task().map_or("", |t| t.1);
