@@ -44,8 +44,9 @@ pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, Tr
 pub use plane::{PlaneCaster, ray_circle};
 pub use scene::Scene;
 pub use sensors::cast;
-pub use sensors::{CameraSpec, FaultConfig, Interval, StuckEncoder, TOOL_CAMERA};
+pub use sensors::{FaultConfig, Interval, StuckEncoder};
 pub use simulator::{SimConfig, Simulator, Truth};
+pub use stucco_core::{CameraSpec, TOOL_CAMERA};
 pub use tour::TourDriver;
 pub use trace::TraceHash;
 pub use vehicle::{DriveState, DynamicsConfig};

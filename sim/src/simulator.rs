@@ -6,7 +6,7 @@ use crate::deposition::{Coat, Deposition, SprayerSpec, SurfaceKind, ToolState};
 use crate::layout::Layout;
 use crate::plane::PlaneCaster;
 use crate::scene::Scene;
-use crate::sensors::{CameraRig, CameraSpec, FaultConfig, LaserRig};
+use crate::sensors::{CameraRig, FaultConfig, LaserRig};
 use crate::vehicle::{ActuatorFaults, Drive, DriveState, DynamicsConfig};
 use crate::world::WorldSpec;
 use rand::SeedableRng;
@@ -14,8 +14,8 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use stucco_core::{
-    DriveCommand, EncoderSample, LaserSpec, Platform, Pose2, Readings, Scan, Stamp, ThicknessGrid,
-    ToolCommand, VehicleSpec,
+    CameraSpec, DriveCommand, EncoderSample, LaserSpec, Platform, PlatformError, Pose2, Readings,
+    RobotSpec, Scan, Stamp, ThicknessGrid, ToolCommand, VehicleSpec,
 };
 
 /// How to simulate: the robot, its sensors, the floor and the faults.
@@ -51,6 +51,17 @@ impl Default for SimConfig {
             faults: FaultConfig::default(),
             physics_rate_hz: 100.0,
             sprayer: None,
+        }
+    }
+}
+
+impl SimConfig {
+    /// The simulated robot as its software knows it: vehicle and sensors.
+    pub fn robot(&self) -> RobotSpec {
+        RobotSpec {
+            vehicle: self.vehicle.clone(),
+            laser: self.laser.clone(),
+            camera: self.camera.clone(),
         }
     }
 }
@@ -121,6 +132,18 @@ pub struct Simulator {
 }
 
 impl Simulator {
+    /// Advances the simulation by `dt_s` seconds (whole physics steps)
+    /// and returns what its sensors delivered meanwhile: [`Platform::advance`],
+    /// which a simulation never fails.
+    pub fn advance(&mut self, dt_s: f64) -> Readings {
+        let mut out = Readings::default();
+        let steps = (dt_s * 1e9 / self.step_ns as f64).round().max(1.0) as usize;
+        for _ in 0..steps {
+            self.step(&mut out);
+        }
+        out
+    }
+
     /// A simulation of `world` with `config`; `seed` overrides the world's.
     pub fn new(world: &WorldSpec, config: SimConfig, seed: Option<u64>) -> Simulator {
         let seed = seed.unwrap_or(world.seed);
@@ -303,12 +326,7 @@ impl Platform for Simulator {
         }
     }
 
-    fn advance(&mut self, dt_s: f64) -> Readings {
-        let mut out = Readings::default();
-        let steps = (dt_s * 1e9 / self.step_ns as f64).round().max(1.0) as usize;
-        for _ in 0..steps {
-            self.step(&mut out);
-        }
-        out
+    fn advance(&mut self, dt_s: f64) -> Result<Readings, PlatformError> {
+        Ok(Simulator::advance(self, dt_s))
     }
 }

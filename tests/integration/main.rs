@@ -51,6 +51,12 @@ impl RunningRobot {
             link,
             speed,
             stop_after_s: Some(900.0),
+            exit_when_done: false,
+            out: None,
+            resume: false,
+            record: false,
+            platform: stucco_cli::PlatformKind::Sim,
+            platform_timeout: std::time::Duration::from_secs(10),
         };
         let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
         let thread = {

@@ -1,8 +1,7 @@
 //! `stucco run` for experiment missions: paper A's navigation experiments
 //! in the simulator, seeds in parallel, scored against the truth.
 
-use crate::mission::{Corridor, DoorPassage, Mission, RoomSize};
-use crate::navigator::Navigator;
+use crate::sim_robot::LawDriven;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -10,6 +9,7 @@ use std::path::{Path, PathBuf};
 use stucco_control::{GainSchedule, LineFollower};
 use stucco_core::{Pose2, wrap_angle};
 use stucco_nav::RoomState;
+use stucco_runtime::{Corridor, DoorPassage, Mission, RoomSize};
 use stucco_sim::{Layout, OpeningKind, TourDriver, WorldSpec};
 
 /// Control periods an experiment may take before it is called stuck.
@@ -80,7 +80,7 @@ fn stats(v: &[f64]) -> (f64, f64) {
 /// Runs the mission.
 pub fn run_mission(job: &RunJob) -> Result<RunReport> {
     let mission = Mission::load(&job.mission)?;
-    let world_path = mission.world_path(&job.mission);
+    let world_path = mission.world_path(&job.mission)?;
     let world = WorldSpec::load(&world_path)
         .with_context(|| format!("the world of {}", job.mission.display()))?;
     let seed = job.seed.unwrap_or(mission.seed);
@@ -131,7 +131,7 @@ fn start_state(start: &Pose2, room_m: [f64; 2]) -> RoomState {
     )
 }
 
-fn pose_of(s: &crate::mission::Start) -> Pose2 {
+fn pose_of(s: &stucco_runtime::Start) -> Pose2 {
     Pose2::new(s.at[0], s.at[1], s.heading_deg.to_radians())
 }
 
@@ -235,7 +235,7 @@ fn passage(
     speed: f64,
     seed: u64,
 ) -> Result<(f64, f64, f64)> {
-    let mut nav = Navigator::new(world, seed, start_state(start, d.room_m), [0.2, 0.2])?;
+    let mut nav = LawDriven::new(world, seed, start_state(start, d.room_m), [0.2, 0.2])?;
     // The map's door, `door_map_error_m` off: the filter places it.
     let door = nav.add_door(2, d.door_m[1] - d.door_map_error_m, 0.1);
     let law = LineFollower::new(GainSchedule::default());
@@ -244,7 +244,7 @@ fn passage(
         let x = nav.estimate();
         // The law aims at the filter's door, as the paper's ŷd: the map
         // only seeds it, `door_map_error_m` off.
-        let Some(now) = nav.step(speed, law.steer(x[1] - x[door], x[2], speed)) else {
+        let Some(now) = nav.step(speed, law.steer(x[1] - x[door], x[2], speed))? else {
             bail!(
                 "seed {seed}: the robot touched something at {:?}",
                 nav.truth()
@@ -308,12 +308,12 @@ fn corridor_run(
     middle: f64,
     seed: u64,
 ) -> Result<Vec<(f64, f64)>> {
-    let mut nav = Navigator::new(w, seed, start_state(start, c.room_m), [0.5, 0.1])?;
+    let mut nav = LawDriven::new(w, seed, start_state(start, c.room_m), [0.5, 0.1])?;
     let law = LineFollower::new(GainSchedule::default());
     let mut out = Vec::new();
     for _ in 0..MAX_STEPS {
         let x = nav.estimate();
-        let Some(now) = nav.step(c.speed_mps, law.steer(x[1] - 0.5 * x[4], x[2], c.speed_mps))
+        let Some(now) = nav.step(c.speed_mps, law.steer(x[1] - 0.5 * x[4], x[2], c.speed_mps))?
         else {
             bail!(
                 "seed {seed}: the robot touched something at {:?}",
@@ -348,7 +348,7 @@ fn room_size(world: &WorldSpec, r: &RoomSize, seed: u64) -> Result<RoomSizeRun> 
         world.robot.at[1],
         world.robot.heading_deg.to_radians(),
     );
-    let mut nav = Navigator::new(
+    let mut nav = LawDriven::new(
         world,
         seed,
         start_state(&start, r.room_m),
@@ -356,13 +356,13 @@ fn room_size(world: &WorldSpec, r: &RoomSize, seed: u64) -> Result<RoomSizeRun> 
     )?;
     let mut driver = TourDriver::new(world.tour.clone(), r.speed_mps);
     let vehicle = stucco_sim::SimConfig::default().vehicle;
-    let steps = (r.seconds / crate::navigator::DT_S).round() as usize;
+    let steps = (r.seconds / stucco_runtime::DT_S).round() as usize;
     let (mut pos, mut head, mut n) = (0.0, 0.0, 0usize);
     for k in 0..steps {
         let x = nav.estimate();
         // The tour driven on the filter's estimate, not on the truth.
         let cmd = driver.command(&Pose2::new(x[0], x[1], x[2]), &vehicle);
-        let Some(now) = nav.step(cmd.speed_mps, cmd.steer_rad) else {
+        let Some(now) = nav.step(cmd.speed_mps, cmd.steer_rad)? else {
             bail!(
                 "seed {seed}: the robot touched something at {:?}",
                 nav.truth()
@@ -391,7 +391,7 @@ pub fn load_all(dir: &Path) -> Result<Vec<Mission>> {
         let path = entry?.path();
         if path.extension().is_some_and(|e| e == "toml") {
             let m = Mission::load(&path)?;
-            WorldSpec::load(&m.world_path(&path))
+            WorldSpec::load(&m.world_path(&path)?)
                 .with_context(|| format!("the world of {}", path.display()))?;
             out.push(m);
         }

@@ -5,7 +5,8 @@
 //! - [`run_walls`]: the `stucco walls` job.
 //! - [`run_simbench`]: the `stucco simbench` job.
 //! - [`run_mission`]: the `stucco run` job for experiment missions
-//!   ([`Mission`]), closing the loop through [`Navigator`].
+//!   ([`Mission`]), closing the loop through the runtime's robot on the simulator
+//!   ([`LawDriven`]).
 //! - [`run_task_mission`]: the `stucco run` job for task missions: the
 //!   executive of `stucco-mission` in the simulator, with report, events,
 //!   map and checkpoints; [`Recorder`] and [`replay_run`] record a run as
@@ -22,13 +23,13 @@ mod experiments;
 mod floor;
 mod log_replay;
 mod logging;
-mod mission;
-mod navigator;
 mod op;
 mod plan_view;
 mod plastering;
 mod record;
 mod robot;
+mod sim_robot;
+mod sim_serve;
 mod simbench;
 mod study;
 mod study_plot;
@@ -43,20 +44,27 @@ pub use log_replay::{
     Reference, run_log_replay,
 };
 pub use logging::init_logging;
-pub use mission::{BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge};
-pub use navigator::{DT_S, Navigator};
 pub use op::{BenchReport, CommandResult, EventFeed, Operator};
 pub use plastering::{
     PlasterReport, PredictedScores, RoomPlaster, WorldState, sprayer_of, time_lower_bound,
 };
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
-pub use robot::{RobotJob, RobotRun, RobotState, run_robot};
+pub use robot::{PlatformKind, RobotJob, RobotRun, RobotState, run_robot};
+pub use sim_robot::{
+    LawDriven, Served, SimRobot, Simulated, WorldKeeper, load_world, mission_sim_config,
+    mission_simulator, robot_on, robot_spec, sim_robot,
+};
+pub use sim_serve::{ServeJob, ServeRun, serve};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};
 pub use stucco_link::{Denial, Faults, FaultyRelay, LinkConfig, Mode as LinkMode, router};
+pub use stucco_runtime::{
+    BadInput, Checkpoint, Corridor, DT_S, DoorPassage, Mission, RoomSize, Start, StartKnowledge,
+    write_atomic,
+};
 pub use study::{Axes, Axis, Compare, SettingReport, Study, StudyJob, StudyReport, run_study};
 pub use task_mission::{
-    Checkpoint, DoorReport, MissionReport, MissionSummary, RoomChange, TaskMissionJob, TaskReport,
-    run_task_mission, write_atomic,
+    DoorReport, MissionReport, MissionSummary, RoomChange, TaskMissionJob, TaskReport, WORLD_FILE,
+    run_task_mission,
 };
 pub use walls::{
     ExtractorKind, MIN_REOBSERVATIONS, WallsJob, WallsReport, make_extractor, run_walls,

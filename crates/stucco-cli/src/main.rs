@@ -13,7 +13,7 @@ use stucco_cli::{
     BadInput, ExtractorKind, Mission, MissionReport, MissionSummary, RunJob, SimbenchJob,
     TaskMissionJob, WallsJob, replay_run, run_mission, run_simbench, run_task_mission, run_walls,
 };
-use stucco_cli::{LinkConfig, Operator, RobotJob, run_robot};
+use stucco_cli::{LinkConfig, Operator, PlatformKind, RobotJob, ServeJob, run_robot, serve};
 use stucco_cli::{LogReplayJob, OdomNoise, OdometrySource, Reference, run_log_replay};
 use stucco_core::{Command as Tc, Reply, Side, SurfaceName, WallName};
 use stucco_link::Mode;
@@ -104,6 +104,36 @@ enum Command {
         /// Join as a client of the router `--connect` names, not as a peer.
         #[arg(long)]
         client: bool,
+        /// The job's folder: a checkpoint after every unit of work (as
+        /// `stucco run` writes), the events, the report when it stops.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Go on from the checkpoint in `--out`: a robot switched off in
+        /// the middle of a job finishes it.
+        #[arg(long)]
+        resume: bool,
+        /// Record the run to `--out`/run.mcap (open it in Foxglove).
+        #[arg(long)]
+        record: bool,
+        /// Leave when the mission's tasks are over, instead of waiting for
+        /// the operator's commands.
+        #[arg(long)]
+        exit_when_done: bool,
+        /// The robot's body: the simulator in this process, or a platform
+        /// on zenoh under `stucco/NAME/platform/` (`stucco sim serve`, a
+        /// real robot's driver).
+        #[arg(long, value_enum, default_value_t = PlatformKind::Sim)]
+        platform: PlatformKind,
+        /// How long a platform on zenoh may stay silent (to be found, or
+        /// within a period) before the robot stops, s.
+        #[arg(long, default_value_t = 10.0)]
+        platform_timeout: f64,
+    },
+    /// The simulator on its own: `stucco sim serve WORLD --name NAME`.
+    Sim {
+        /// What to do.
+        #[command(subcommand)]
+        action: SimAction,
     },
     /// A zenoh router for a site: robots and operators connect to it
     /// (`--client`) and it routes between them; runs until stopped.
@@ -229,6 +259,50 @@ enum Command {
         /// Print the report as one JSON object on stdout.
         #[arg(long)]
         json: bool,
+    },
+}
+
+/// What `stucco sim` does.
+#[derive(Subcommand, Clone, Debug)]
+enum SimAction {
+    /// Serve a simulated robot as a platform over zenoh: its readings on
+    /// `stucco/NAME/platform/readings`, its drive and tool commands taken
+    /// on `stucco/NAME/platform/command` (docs/platform.md). Runs until
+    /// stopped.
+    Serve {
+        /// The world file (`sim/worlds/*.toml`).
+        world: PathBuf,
+        /// The platform's name on the network.
+        #[arg(long)]
+        name: String,
+        /// A mission whose robot to simulate: its sprayer, seed and people.
+        #[arg(long)]
+        mission: Option<PathBuf>,
+        /// Seed, instead of the mission's or the world's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Step only when the period's command has come (a run the same
+        /// whatever the link's delays).
+        #[arg(long)]
+        lockstep: bool,
+        /// Free-running: simulated seconds per wall-clock second.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+        /// Stop after this many simulated seconds.
+        #[arg(long)]
+        stop_after: Option<f64>,
+        /// Endpoints to listen on (e.g. `tcp/127.0.0.1:7447`).
+        #[arg(long)]
+        listen: Vec<String>,
+        /// Endpoints (peers, a router) to connect to.
+        #[arg(long)]
+        connect: Vec<String>,
+        /// A zenoh configuration file (JSON5).
+        #[arg(long)]
+        zenoh_config: Option<PathBuf>,
+        /// Join as a client of the router `--connect` names, not as a peer.
+        #[arg(long)]
+        client: bool,
     },
 }
 
@@ -866,7 +940,7 @@ fn main() -> ExitCode {
         } => {
             let tasks = match Mission::load(&mission) {
                 Ok(m) => !m.tasks.is_empty(),
-                Err(e) => return fail(&e),
+                Err(e) => return fail(&e.into()),
             };
             if tasks {
                 run_tasks(
@@ -901,7 +975,17 @@ fn main() -> ExitCode {
             speed,
             stop_after,
             client,
+            out,
+            resume,
+            record,
+            exit_when_done,
+            platform,
+            platform_timeout,
         } => {
+            if !(platform_timeout.is_finite() && platform_timeout > 0.0) {
+                eprintln!("error: --platform-timeout: a positive number of seconds");
+                return ExitCode::from(2);
+            }
             let job = RobotJob {
                 mission,
                 name,
@@ -913,14 +997,63 @@ fn main() -> ExitCode {
                 },
                 speed,
                 stop_after_s: stop_after,
+                exit_when_done,
+                out,
+                resume,
+                record,
+                platform,
+                platform_timeout: std::time::Duration::from_secs_f64(platform_timeout),
             };
             match run_robot(&job, &Arc::new(AtomicBool::new(false))) {
                 Ok(run) => {
                     eprintln!(
-                        "robot {}: {:.1} s simulated, {} message(s) refused by access control",
+                        "robot {}: mission {}, {:.1} s simulated, {} message(s) refused by access control",
                         job.name,
+                        run.outcome,
                         run.simulated_s,
                         run.denials.len()
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(&e),
+            }
+        }
+        Command::Sim {
+            action:
+                SimAction::Serve {
+                    world,
+                    name,
+                    mission,
+                    seed,
+                    lockstep,
+                    speed,
+                    stop_after,
+                    listen,
+                    connect,
+                    zenoh_config,
+                    client,
+                },
+        } => {
+            let job = ServeJob {
+                world,
+                name,
+                link: LinkConfig {
+                    mode: if client { Mode::Client } else { Mode::Peer },
+                    listen,
+                    connect,
+                    config_file: zenoh_config,
+                },
+                mission,
+                seed,
+                lockstep,
+                speed,
+                stop_after_s: stop_after,
+            };
+            match serve(&job, &AtomicBool::new(false)) {
+                Ok(run) => {
+                    eprintln!(
+                        "platform {}: {} periods, {:.1} s simulated, {} command(s) refused",
+                        job.name, run.periods, run.simulated_s, run.refused
                     );
                     ExitCode::SUCCESS
                 }

@@ -3,16 +3,17 @@
 //! true surfaces of the robot's room, the world's plaster kept across a
 //! kill, and a thickness map per surface.
 
-use crate::task_mission::{RoomFrame, write_atomic};
+use crate::task_mission::RoomFrame;
 use anyhow::{Context, Result};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use stucco_core::{ThicknessGrid, WallName};
+use stucco_core::{Pose2, ThicknessGrid, WallName};
 use stucco_plan::{
     OpeningKind as PlanOpening, Plan, RoomModel, RoomScore, SprayTool, SurfaceId, SurfaceScore,
     WallLine, WallOpening, score,
 };
+use stucco_runtime::write_atomic;
 use stucco_sim::{Coat, Layout, OpeningKind, Simulator, SprayerSpec, SurfaceKind, TrueOpening};
 
 /// Cells of the simulator's thickness grids, m (the issue asks ≤ 2 cm).
@@ -234,11 +235,16 @@ pub fn time_lower_bound(plan: &Plan, start: &stucco_core::Pose2, top_speed_mps: 
     area / plan.tool.area_rate_m2ps() + travel / top_speed_mps
 }
 
-/// The world's plaster, kept across a kill so a resumed run scores the
-/// whole job (the plaster stays on the walls when the robot stops).
+/// The simulated world's state, written with every checkpoint and kept
+/// across a kill: the plaster stays on the walls and the robot stands
+/// where it stopped, so a resumed run goes on in the same world and scores
+/// the whole job. It is the simulator's: the robot's checkpoint knows
+/// nothing of it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldState {
+    /// Where the robot truly stood (world frame).
+    pub robot: Pose2,
     /// Coats with plaster on them: room, surface, grid.
     pub coats: Vec<(String, SurfaceKindSer, ThicknessGrid)>,
     /// Plaster sprayed so far, m³.
@@ -256,9 +262,10 @@ pub enum SurfaceKindSer {
 }
 
 impl WorldState {
-    /// The plaster of `sim`.
+    /// The state of `sim`: where its robot stands, its plaster.
     pub fn of(sim: &Simulator) -> WorldState {
         WorldState {
+            robot: sim.truth().drive.pose,
             coats: sim
                 .coats()
                 .iter()
@@ -293,7 +300,7 @@ impl WorldState {
 
     /// Writes it atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
-        write_atomic(path, serde_json::to_string(self)?.as_bytes())
+        Ok(write_atomic(path, serde_json::to_string(self)?.as_bytes())?)
     }
 
     /// Reads it back.

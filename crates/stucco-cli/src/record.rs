@@ -16,7 +16,8 @@
 //! executive built from `/mission` and compares its commands with
 //! `/executive/outputs`, tick by tick.
 
-use crate::mission::{BadInput, Mission};
+use crate::sim_robot::Simulated;
+use crate::task_mission::RoomFrame;
 use anyhow::{Context, Result, anyhow};
 use mcap::records::MessageHeader;
 use nalgebra::Point2;
@@ -25,7 +26,9 @@ use std::collections::BTreeMap;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 use stucco_core::{DriveCommand, Pose2, Stamp, Telecommand, ToolCommand};
-use stucco_mission::{Estimate, Event, Executive, Inputs, OperatorCommand, Progress};
+use stucco_mission::{Estimate, Event, Executive, Inputs, OperatorCommand, Outputs, Progress};
+use stucco_runtime::{BadInput, Mission, Robot, Sink, SinkError};
+use stucco_sim::Layout;
 
 /// The `/mission` message.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -200,6 +203,68 @@ impl<W: Write + Seek> Recorder<W> {
     }
 }
 
+/// Records a simulated run: each tick as the executive saw it, with the
+/// true pose in the frame of the room the robot's frame is in.
+pub struct Recording {
+    recorder: Recorder<BufWriter<std::fs::File>>,
+    scans: u64,
+    layout: std::sync::Arc<Layout>,
+    frame: RoomFrame,
+}
+
+impl Recording {
+    /// Records into `recorder`, the robot starting in the room of `frame`
+    /// of `layout`.
+    pub fn new(
+        recorder: Recorder<BufWriter<std::fs::File>>,
+        layout: std::sync::Arc<Layout>,
+        frame: RoomFrame,
+    ) -> Self {
+        Recording {
+            recorder,
+            scans: 0,
+            layout,
+            frame,
+        }
+    }
+
+    /// Writes the summary and closes the file.
+    pub fn finish(self) -> Result<()> {
+        self.recorder.finish()
+    }
+}
+
+impl<P: Simulated> Sink<P> for Recording {
+    fn ticked(
+        &mut self,
+        robot: &Robot<P>,
+        inputs: &Inputs<'_>,
+        out: &Outputs,
+    ) -> std::result::Result<(), SinkError> {
+        let scans = robot.perception().scans();
+        let new_scan = scans != self.scans;
+        self.scans = scans;
+        let truth = self.frame.to_room(&robot.platform().true_pose());
+        self.recorder
+            .tick(inputs, new_scan, out.drive, out.tool, &out.events, &truth)?;
+        Ok(())
+    }
+
+    fn entered(
+        &mut self,
+        robot: &Robot<P>,
+        _door: usize,
+        _moved: &std::result::Result<(), String>,
+    ) -> std::result::Result<(), SinkError> {
+        if let Some(name) = robot.perception().room_name()
+            && name != self.frame.name
+        {
+            self.frame = RoomFrame::named(&self.layout, name)?;
+        }
+        Ok(())
+    }
+}
+
 /// What replaying a recording found.
 #[derive(Clone, Debug, Serialize)]
 pub struct ReplayReport {
@@ -242,7 +307,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                     Mission::parse_with_plan(&r.text, Path::new(&r.path), r.plan_text.as_deref())
                         .map_err(|e| bad(format!("/mission: {e:#}")))?;
                 name = mission.name.clone();
-                let mut e = mission.executive(true);
+                let mut e = mission.executive(&crate::sim_robot::robot_spec(), true);
                 if let Some(p) = &r.resumed_from {
                     e.resume_from(p).map_err(|e| bad(e.to_string()))?;
                 }

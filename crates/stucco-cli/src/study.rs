@@ -33,10 +33,9 @@ use stucco_nav::{
 };
 use stucco_sim::{DynamicsConfig, Layout, SimConfig, Simulator, TourDriver, TourSpec, WorldSpec};
 
-use crate::mission::{BadInput, line_of, parse_toml};
-use crate::navigator::DT_S;
 use crate::study_plot::{AxisPoint, draw_axis};
 use crate::walls::{ExtractorKind, make_extractor};
+use stucco_runtime::{BadInput, DT_S, line_of, parse_toml};
 
 /// A new wall of the map is founded only by a fit whose residual is
 /// within this many of the laser's σ: one flat surface.

@@ -4,22 +4,28 @@
 //! events, a map, and a checkpoint after every finished task so a run
 //! started again with `--resume` goes on where it stopped.
 
-use crate::mission::{BadInput, Mission};
-use crate::navigator::Navigator;
 use crate::plan_view::{PlanPath, PlanSegment, draw_plan};
+use crate::plastering::WorldState;
+use crate::record::Recording;
 use crate::record::{RecordedMission, Recorder};
+use crate::sim_robot::{Simulated, WorldKeeper, mission_simulator, robot_on, robot_spec};
 use anyhow::{Context, Result};
 use nalgebra::{Matrix3, Point2, SVector, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::hash::Hasher;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
-use stucco_core::{Pose2, Stamp, wrap_angle};
+use stucco_core::{Platform, Pose2, wrap_angle};
 use stucco_mission::{
-    BehaviourKind, DoorEstimate, Event, EventKind, Executive, Inputs, MissionMode, Progress,
-    TaskSpec, TaskStatus, WallGeometry, WallName,
+    BehaviourKind, EventKind, Inputs, MissionMode, Outputs, TaskSpec, TaskStatus, WallGeometry,
+    WallName,
+};
+use stucco_runtime::Robot;
+use stucco_runtime::{
+    BadInput, Checkpoint, Checkpointer, EventLog, Mission, PLAN_FILE, RoomMap, Sink, SinkError,
+    TaskTimes, read_checkpoint, windows_by_room, write_atomic,
 };
 use stucco_sim::{Layout, OpeningKind, WorldSpec};
 
@@ -117,22 +123,6 @@ pub struct PassReport {
     pub samples: usize,
 }
 
-/// The windows found in every room the robot has been in, the room it is
-/// in first: the navigator's, and those of rooms a run resumed from
-/// `resume` had left before it (unless the robot has been in them since).
-fn windows_by_room<'a>(
-    nav: &'a Navigator,
-    resume: Option<&'a Checkpoint>,
-) -> Vec<crate::navigator::RoomWindows<'a>> {
-    let mut all = nav.windows_by_room();
-    for (room, w) in resume.iter().flat_map(|cp| &cp.rooms_left) {
-        if !all.iter().any(|(r, _)| *r == Some(room.as_str())) {
-            all.push((Some(room.as_str()), w.clone()));
-        }
-    }
-    all
-}
-
 /// The rooms of `mission`'s floor plan none of `plastered` is, each with
 /// its drawn floor and why.
 fn rooms_left(
@@ -160,10 +150,9 @@ fn rooms_left(
 
 /// An opening the camera finds this near the floor is a door, m.
 const DOOR_SILL_M: f64 = 0.1;
-/// The plan a plastering run carries out, beside its checkpoint.
-const PLAN_FILE: &str = "plan.json";
-/// The world's plaster when the run stopped (kept for a resumed run).
-const WORLD_FILE: &str = "world.json";
+/// The simulated world's state (the plaster, where the robot stands),
+/// written with every checkpoint: a resumed run goes on in it.
+pub const WORLD_FILE: &str = "world.json";
 /// Every room's plan a run has plastered on (beside the checkpoint): a
 /// resumed run scores the whole job, rooms done before the stop too.
 const PLASTERED_FILE: &str = "plastered.json";
@@ -305,124 +294,6 @@ pub struct MissionSummary {
     pub runs: Vec<MissionReport>,
 }
 
-/// What a checkpoint file holds.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Checkpoint {
-    /// The mission's name.
-    pub mission: String,
-    /// Digest of the mission file's text and its plan file's: a checkpoint
-    /// of another version of either is refused.
-    pub digest: String,
-    /// The seed of the run.
-    pub seed: u64,
-    /// The tasks' states.
-    pub progress: Progress,
-    /// What the robot knew of the room.
-    pub map: RoomMap,
-    /// Where the simulated robot stood (world frame): a resumed run starts
-    /// it there, as a robot switched off stays where it was.
-    pub sim_pose: Pose2,
-    /// Seconds each task started has taken, over every part of the run
-    /// (one under way: so far), by task index: a resumed run reports the
-    /// whole job's plastering time.
-    #[serde(default)]
-    pub task_seconds: std::collections::BTreeMap<usize, f64>,
-    /// The windows found in each room the robot had left, by the plan's
-    /// name of the room: a resumed run reports them with its own.
-    #[serde(default)]
-    pub rooms_left: Vec<(String, Vec<(WallName, stucco_nav::Window)>)>,
-}
-
-/// The room as the robot knew it at a checkpoint.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RoomMap {
-    /// Its size, m.
-    pub room_m: [f64; 2],
-    /// Its σ, m.
-    pub room_sigma_m: [f64; 2],
-    /// Its doors.
-    pub doors: Vec<DoorEstimate>,
-    /// The robot's estimated pose in it.
-    pub pose: Pose2,
-    /// The floor plan's room it is, when the mission has a plan.
-    #[serde(default)]
-    pub room: Option<String>,
-    /// The windows the camera had found in it, wall by wall.
-    #[serde(default)]
-    pub windows: Vec<(WallName, stucco_nav::Window)>,
-}
-
-/// FNV-1a digest of what a checkpoint of `mission` must have been made
-/// with: the mission file's text and, when it names one, its plan file's
-/// (door numbers in a checkpoint are the plan's), each as the mission was
-/// parsed from it, a newline between.
-fn digest(mission: &Mission) -> String {
-    let mut h = fnv::FnvHasher::default();
-    h.write(mission.text().as_bytes());
-    if let Some(plan) = mission.plan_text() {
-        h.write(b"\n");
-        h.write(plan.as_bytes());
-    }
-    format!("fnv1a64:{:016x}", h.finish())
-}
-
-/// Writes `bytes` to `path` atomically: a temporary file beside it,
-/// flushed to disk, renamed over it, the folder flushed.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp"));
-    {
-        let mut f = std::fs::File::create(&tmp)
-            .with_context(|| format!("cannot write {}", tmp.display()))?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot replace {}", path.display()))?;
-    if let Ok(d) = std::fs::File::open(dir) {
-        // Persists the rename; not every platform can sync a folder.
-        let _ = d.sync_all();
-    }
-    Ok(())
-}
-
-/// Reads the checkpoint at `path` for `mission`, or says why it cannot be
-/// used — leaving the file as it is.
-fn read_checkpoint(path: &Path, mission: &Mission) -> Result<Checkpoint> {
-    let raw = std::fs::read_to_string(path).map_err(|e| {
-        BadInput(format!(
-            "{}: cannot read the checkpoint: {e}",
-            path.display()
-        ))
-    })?;
-    let cp: Checkpoint = serde_json::from_str(&raw).map_err(|e| {
-        BadInput(format!(
-            "{}:{}:{}: the checkpoint is corrupt ({e}); it is left as it is",
-            path.display(),
-            e.line(),
-            e.column()
-        ))
-    })?;
-    let digest = digest(mission);
-    if cp.mission != mission.name || cp.digest != digest {
-        return Err(BadInput(format!(
-            "{}: the checkpoint was written for mission {:?} ({}), not this file ({:?}, {}); it is left as it is",
-            path.display(),
-            cp.mission,
-            cp.digest,
-            mission.name,
-            digest
-        ))
-        .into());
-    }
-    Ok(cp)
-}
-
 /// Runs the task mission of `job`; `progress` hears the simulated time and
 /// the task under way of the first run.
 pub fn run_task_mission(
@@ -433,7 +304,7 @@ pub fn run_task_mission(
     if mission.tasks.is_empty() {
         return Err(BadInput(format!("{}: no [[task]] in it", job.mission.display())).into());
     }
-    let world = mission.load_world(&job.mission)?;
+    let world = crate::sim_robot::load_world(&mission, &job.mission)?;
     let runs = job.runs.unwrap_or(mission.runs);
     if runs == 0 {
         return Err(BadInput(format!("{}: runs: at least one", job.mission.display())).into());
@@ -452,7 +323,7 @@ pub fn run_task_mission(
     if job.resume
         && let Some(dir) = &job.out
     {
-        let cp = read_checkpoint(&dir.join("checkpoint.json"), &mission)?;
+        let cp = read_checkpoint(&dir.join(stucco_runtime::CHECKPOINT_FILE), &mission)?;
         seed = job.seed.unwrap_or(cp.seed);
         resume = Some(cp);
     }
@@ -574,268 +445,74 @@ fn bounds(points: &[Point2<f64>]) -> ([f64; 2], [f64; 2]) {
 }
 
 /// What every run of a job shares.
-struct Setup<'a> {
-    mission: &'a Mission,
+pub(crate) struct Setup<'a> {
+    pub(crate) mission: &'a Mission,
     /// Where the mission file is.
-    mission_path: &'a Path,
+    pub(crate) mission_path: &'a Path,
     /// Record each run to `run.mcap`.
-    record: bool,
-    world: &'a WorldSpec,
-    resume: Option<&'a Checkpoint>,
-    stop_after: Option<f64>,
+    pub(crate) record: bool,
+    pub(crate) world: &'a WorldSpec,
+    pub(crate) resume: Option<&'a Checkpoint>,
+    pub(crate) stop_after: Option<f64>,
 }
 
-/// One run of the mission with `seed`, writing into `out`.
-fn run_once(
-    setup: &Setup,
-    seed: u64,
-    out: Option<&Path>,
-    progress: &(dyn Fn(f64, &str) + Sync),
-) -> Result<MissionReport> {
-    let Setup {
-        mission,
-        mission_path,
-        record,
-        world,
-        resume,
-        stop_after,
-    } = *setup;
-    let t0 = Instant::now();
-    let layout = Layout::of(world);
-    let mut world = world.clone();
-    if let Some(cp) = resume {
-        // Where the robot stopped, knowing what it knew.
-        world.robot.at = [cp.sim_pose.x, cp.sim_pose.y];
-        world.robot.heading_deg = cp.sim_pose.theta.to_degrees();
+/// What a simulated run is scored on: the truth read beside the robot's
+/// estimate (the trace, the passes, the plans and the rooms), and the
+/// progress heard. It reads the simulator through the robot's platform; nothing
+/// of it reaches the executive.
+struct SimRun<'a> {
+    layout: Arc<Layout>,
+    out: Option<&'a Path>,
+    resume: Option<&'a Checkpoint>,
+    /// The true frame of the room the robot's frame is in.
+    frame: RoomFrame,
+    trace: Trace,
+    times: TaskTimes,
+    passes: std::collections::BTreeMap<usize, (WallName, f64, Vec<f64>)>,
+    room_changes: Vec<RoomChange>,
+    /// Each plaster task's plan, the true frame of its room, and where the
+    /// robot stood when it was first made.
+    plans: std::collections::BTreeMap<usize, (RoomFrame, stucco_plan::Plan, Pose2)>,
+    progress: &'a (dyn Fn(f64, &str) + Sync),
+}
+
+impl SimRun<'_> {
+    /// The true pose (world frame).
+    fn truth<P: Simulated>(robot: &Robot<P>) -> Pose2 {
+        robot.platform().true_pose()
     }
-    let (mut nav, start_frame) =
-        mission_navigator(mission, &world, seed, resume.map(|cp| &cp.map))?;
-    if resume.is_some() {
-        // The plaster stays on the walls when the robot stops.
-        if let Some(dir) = out
-            && dir.join(WORLD_FILE).exists()
-        {
-            crate::plastering::WorldState::load(&dir.join(WORLD_FILE))?.restore(nav.sim_mut());
-        }
-    }
-    // The truth in the frame of the room the robot is in (scoring only).
-    let mut frame = start_frame;
-    let true_frame = |nav: &Navigator, frame: &mut RoomFrame| -> Result<()> {
-        if let Some(name) = nav.room_name()
-            && name != frame.name
-        {
-            *frame = RoomFrame::named(&layout, name)?;
-        }
-        Ok(())
-    };
-    nav.discover_doors(true);
-    let mut exec = mission.executive(true);
-    if let Some(cp) = resume {
-        if cp.progress.plaster.is_some()
-            && let Some(dir) = out
-        {
-            let path = dir.join(PLAN_FILE);
-            let text = std::fs::read_to_string(&path).map_err(|e| {
-                BadInput(format!(
-                    "{}: the plan the checkpoint was carrying out: {e}",
-                    path.display()
-                ))
-            })?;
-            let plan: stucco_plan::Plan = serde_json::from_str(&text)
-                .map_err(|e| BadInput(format!("{}: not a plan: {e}", path.display())))?;
-            exec.resume_plan(plan);
-        }
-        exec.resume_from(&cp.progress)
-            .map_err(|e| BadInput(format!("the checkpoint does not fit the mission: {e}")))?;
-    }
-    let first_task = exec
-        .status()
-        .iter()
-        .position(|s| *s == TaskStatus::Pending)
-        .unwrap_or(exec.tasks().len());
-    let mut events_file = match out {
-        Some(dir) => {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("cannot create {}", dir.display()))?;
-            let path = dir.join("events.jsonl");
-            let f = std::fs::OpenOptions::new()
-                .create(true)
-                .append(resume.is_some())
-                .write(true)
-                .truncate(resume.is_none())
-                .open(&path)
-                .with_context(|| format!("cannot write {}", path.display()))?;
-            Some(std::io::BufWriter::new(f))
-        }
-        None => None,
-    };
-    let plan_written = std::cell::RefCell::new(String::new());
-    let save = |exec: &Executive,
-                nav: &Navigator,
-                task_seconds: std::collections::BTreeMap<usize, f64>|
-     -> Result<()> {
-        if let Some(dir) = out {
-            let progress = exec.progress();
-            // The plan first, once: the checkpoint names it by digest.
-            if let (Some(plan), Some(p)) = (exec.plaster_plan(), &progress.plaster)
-                && *plan_written.borrow() != p.plan_digest
-            {
-                write_atomic(
-                    &dir.join(PLAN_FILE),
-                    serde_json::to_string(plan)?.as_bytes(),
-                )?;
-                *plan_written.borrow_mut() = p.plan_digest.clone();
-            }
-            let est = nav.mission_estimate();
-            let rooms_left = windows_by_room(nav, resume)
-                .into_iter()
-                .skip(1)
-                .filter_map(|(room, w)| Some((room?.to_owned(), w)))
-                .collect();
-            let cp = Checkpoint {
-                mission: mission.name.clone(),
-                digest: digest(mission),
-                seed,
-                progress,
-                map: RoomMap {
-                    room_m: est.room_m,
-                    room_sigma_m: est.room_sigma_m,
-                    doors: est.doors.clone(),
-                    pose: est.pose,
-                    room: nav.room_name().map(str::to_owned),
-                    windows: nav.windows(),
-                },
-                sim_pose: nav.truth(),
-                task_seconds,
-                rooms_left,
-            };
-            write_atomic(
-                &dir.join("checkpoint.json"),
-                serde_json::to_string_pretty(&cp)?.as_bytes(),
-            )?;
-        }
-        Ok(())
-    };
-    let mut trace = Trace::default();
-    let mut bumper = false;
-    let mut events = 0usize;
-    let mut safety_stops = 0usize;
-    let mut task_started: Vec<Option<Stamp>> = vec![None; exec.tasks().len()];
-    let mut task_seconds: Vec<Option<f64>> = vec![None; exec.tasks().len()];
-    // Each task's seconds over every part of the run up to `now`: the
-    // parts before a resume, and this part's (a task under way: so far).
-    let earlier = resume.map(|cp| cp.task_seconds.clone()).unwrap_or_default();
-    let spent = |started: &[Option<Stamp>], ended: &[Option<f64>], now: Stamp| {
-        let mut all = earlier.clone();
-        for (t, (s, e)) in started.iter().zip(ended).enumerate() {
-            if let Some(secs) = e.or_else(|| s.map(|s| now.seconds_since(s))) {
-                *all.entry(t).or_insert(0.0) += secs;
-            }
-        }
-        all
-    };
-    let mut time_out = None;
-    let mut stopped = false;
-    let mut recorder = match (out, record) {
-        (Some(dir), true) => Some(Recorder::create(
-            &dir.join("run.mcap"),
-            &RecordedMission {
-                path: mission_path.display().to_string(),
-                text: mission.text().to_owned(),
-                plan_text: mission.plan_text().map(str::to_owned),
-                seed,
-                resumed_from: resume.map(|cp| cp.progress.clone()),
-            },
-        )?),
-        _ => None,
-    };
-    let mut scans_recorded = 0u64;
-    let mut passes: std::collections::BTreeMap<usize, (WallName, f64, Vec<f64>)> =
-        std::collections::BTreeMap::new();
-    let limit = mission.time_limit_s;
-    let mut step = 0usize;
-    let mut room_changes = Vec::new();
-    // Each plaster task's plan, the true frame of its room, and where the
-    // robot stood when it was first made.
-    let mut plans: std::collections::BTreeMap<usize, (RoomFrame, stucco_plan::Plan, Pose2)> =
-        std::collections::BTreeMap::new();
-    if let (Some(_), Some(dir)) = (resume, out)
-        && dir.join(PLASTERED_FILE).exists()
-    {
-        let path = dir.join(PLASTERED_FILE);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
-        let kept: Vec<PlasteredRoom> = serde_json::from_str(&text)
-            .map_err(|e| BadInput(format!("{}: not the rooms plastered: {e}", path.display())))?;
-        for r in kept {
-            plans.insert(
-                r.task,
-                (RoomFrame::named(&layout, &r.room)?, r.plan, r.start),
-            );
-        }
-    }
-    // The estimate now, read once per control period: before the first
-    // tick, then after each step of the robot.
-    let mut est = nav.mission_estimate();
-    loop {
-        let now = nav.now();
-        let inputs = Inputs {
-            estimate: &est,
-            obstacles: nav.obstacles(),
-            bumper,
-            estop: false,
-            operator: &[],
-            telecommands: &[],
-        };
-        let out_ = exec.tick(now, &inputs);
-        if let Some(r) = recorder.as_mut() {
-            let new_scan = nav.scans() != scans_recorded;
-            scans_recorded = nav.scans();
-            r.tick(
-                &inputs,
-                new_scan,
-                out_.drive,
-                out_.tool,
-                &out_.events,
-                &frame.to_room(&nav.truth()),
-            )?;
-        }
-        for e in &out_.events {
-            match &e.kind {
-                EventKind::TaskStarted { task, .. } => task_started[*task] = Some(e.stamp),
-                EventKind::TaskDone { task }
-                | EventKind::TaskSkipped { task }
-                | EventKind::TaskFailed { task, .. } => {
-                    task_seconds[*task] = task_started[*task].map(|t| e.stamp.seconds_since(t));
-                }
-                EventKind::SafetyStop { .. } => safety_stops += 1,
-                _ => {}
-            }
-            write_event(&mut events_file, e)?;
-            events += 1;
-        }
-        if out_.checkpoint_due {
-            save(&exec, &nav, spent(&task_started, &task_seconds, nav.now()))?;
-        }
+}
+
+impl<P: Simulated> Sink<P> for SimRun<'_> {
+    fn ticked(
+        &mut self,
+        robot: &Robot<P>,
+        inputs: &Inputs<'_>,
+        out: &Outputs,
+    ) -> std::result::Result<(), SinkError> {
+        self.times.hear(out);
         // The plan scored is each task's last one (a survey makes it
         // again, a window the tool's camera finds is kept out of it, a
         // station no way leads to is left out of it); a resumed run's, the
         // one it took up.
-        let made = out_.events.iter().find_map(|e| match e.kind {
+        let made = out.events.iter().find_map(|e| match e.kind {
             EventKind::PlanMade { task, .. }
             | EventKind::WindowFound { task, .. }
             | EventKind::StationGivenUp { task, .. } => Some(task),
             _ => None,
         });
-        let taken_up = resume
+        let taken_up = self
+            .resume
             .and_then(|cp| cp.progress.plaster.as_ref())
             .map(|p| p.task)
-            .filter(|t| !plans.contains_key(t));
-        if let (Some(task), Some(plan)) = (made.or(taken_up), exec.plaster_plan()) {
-            let start = plans.get(&task).map_or(est.pose, |p| p.2);
-            plans.insert(task, (frame.clone(), plan.clone(), start));
-            if let Some(dir) = out {
-                let kept: Vec<PlasteredRoom> = plans
+            .filter(|t| !self.plans.contains_key(t));
+        if let (Some(task), Some(plan)) = (made.or(taken_up), robot.executive().plaster_plan()) {
+            let start = self.plans.get(&task).map_or(inputs.estimate.pose, |p| p.2);
+            self.plans
+                .insert(task, (self.frame.clone(), plan.clone(), start));
+            if let Some(dir) = self.out {
+                let kept: Vec<PlasteredRoom> = self
+                    .plans
                     .iter()
                     .map(|(&task, (f, plan, start))| PlasteredRoom {
                         task,
@@ -850,34 +527,34 @@ fn run_once(
                 )?;
             }
         }
-        if let Some(door) = out_.enter_room {
-            // The executive checks on its next tick that the frame moved.
-            if let Err(why) = nav.enter_through(door) {
-                tracing::warn!(door, "the robot's frame stays: {why}");
-            }
-            true_frame(&nav, &mut frame)?;
-            room_changes.push(RoomChange {
-                stamp_s: now.as_secs_f64(),
-                door,
-                room: nav.room_name().map(str::to_owned),
-                room_true: true_room(&layout, &nav.truth()),
-            });
+        Ok(())
+    }
+
+    fn entered(
+        &mut self,
+        robot: &Robot<P>,
+        door: usize,
+        _moved: &std::result::Result<(), String>,
+    ) -> std::result::Result<(), SinkError> {
+        let perception = robot.perception();
+        if let Some(name) = perception.room_name()
+            && name != self.frame.name
+        {
+            self.frame = RoomFrame::named(&self.layout, name)?;
         }
-        nav.tool(out_.tool);
-        nav.tool_look(out_.tool_look);
-        if exec.mode().is_final() {
-            break;
-        }
-        if now.as_secs_f64() > limit {
-            time_out = Some(format!("time limit: {limit} s of simulated time"));
-            break;
-        }
-        if stop_after.is_some_and(|t| now.as_secs_f64() >= t) {
-            stopped = true;
-            break;
-        }
-        bumper = nav.drive(out_.drive);
-        let truth = frame.to_room(&nav.truth());
+        self.room_changes.push(RoomChange {
+            stamp_s: robot.now().as_secs_f64(),
+            door,
+            room: perception.room_name().map(str::to_owned),
+            room_true: true_room(&self.layout, &Self::truth(robot)),
+        });
+        Ok(())
+    }
+
+    fn stepped(&mut self, robot: &Robot<P>) -> std::result::Result<(), SinkError> {
+        let exec = robot.executive();
+        let truth_w = Self::truth(robot);
+        let truth = self.frame.to_room(&truth_w);
         // A pass's standoff, on the truth, from where the pass starts.
         if let (
             Some((task, _)),
@@ -887,11 +564,11 @@ fn run_once(
         ) = (exec.current_task(), exec.current_behaviour())
             && let TaskSpec::FollowWall { from_m, to_m, .. } = exec.tasks()[task]
         {
-            let g = WallGeometry::of(wall, frame.size_m);
+            let g = WallGeometry::of(wall, self.frame.size_m);
             let p = truth.position().coords;
             let at = g.position(&p);
             if (to_m > from_m && at >= from_m) || (to_m < from_m && at <= from_m) {
-                passes
+                self.passes
                     .entry(task)
                     .or_insert_with(|| (wall, standoff_m, Vec::new()))
                     .2
@@ -900,230 +577,565 @@ fn run_once(
         }
         // The trace in the world frame: the estimate placed by the true
         // corner of the room it is kept in.
-        let (next, pose_covariance) = nav.mission_estimate_with_covariance();
-        est = next;
-        let (est_w, truth_w) = (frame.to_world(&est.pose), nav.truth());
-        if step.is_multiple_of(5) {
-            trace.push(&est_w, &truth_w);
+        let est_w = self.frame.to_world(&robot.estimate().pose);
+        let period = robot.periods() - 1;
+        if period.is_multiple_of(5) {
+            self.trace.push(&est_w, &truth_w);
         }
-        trace.errors(&est_w, &truth_w, &pose_covariance);
-        step += 1;
-        if step.is_multiple_of(50) {
+        self.trace.errors(&est_w, &truth_w, robot.pose_covariance());
+        if robot.periods().is_multiple_of(50) {
             let task = exec.current_task().map_or("", |t| t.1);
-            progress(nav.now().as_secs_f64(), task);
+            (self.progress)(robot.now().as_secs_f64(), task);
         }
+        Ok(())
     }
-    if let Some(w) = events_file.as_mut() {
-        w.flush()?;
-    }
-    if let Some(r) = recorder {
-        r.finish()?;
-    }
-    let task_spent = spent(&task_started, &task_seconds, nav.now());
-    save(&exec, &nav, task_spent.clone())?;
-    if let Some(dir) = out
-        && mission.spray.is_some()
-    {
-        crate::plastering::WorldState::of(nav.sim()).save(&dir.join(WORLD_FILE))?;
-    }
-    let est = nav.mission_estimate();
-    let (outcome, reason) = match (exec.mode(), time_out) {
-        _ if stopped => (
-            "stopped",
-            Some(format!(
-                "stopped after {:.1} s as asked",
-                nav.now().as_secs_f64()
-            )),
-        ),
-        (_, Some(r)) => ("failed", Some(r)),
-        (MissionMode::Done, None) => ("done", None),
-        (MissionMode::Aborted, None) => ("aborted", Some("aborted by the operator".to_owned())),
-        (MissionMode::Failed { reason }, None) => ("failed", Some(reason.clone())),
-        (other, None) => ("failed", Some(format!("stopped while {other:?}"))),
+}
+
+/// A sink's failure as the job's.
+fn sunk(e: SinkError) -> anyhow::Error {
+    anyhow::Error::from_boxed(e)
+}
+
+/// One run of the mission with `seed`, writing into `out`.
+fn run_once(
+    setup: &Setup,
+    seed: u64,
+    out: Option<&Path>,
+    progress: &(dyn Fn(f64, &str) + Sync),
+) -> Result<MissionReport> {
+    // A run is cut at a control period's end (`--stop-after`): the world is
+    // written when it stops, not beside every checkpoint.
+    let mut job = SimJob::start(setup, seed, out, progress, true, false, |world| {
+        Ok((mission_simulator(setup.mission, world, seed), robot_spec()))
+    })?;
+    let limit = setup.mission.time_limit_s;
+    let ending = loop {
+        let now = job.robot.now();
+        job.tick(&[], None)?;
+        if job.robot.executive().mode().is_final() {
+            break Ending::Over;
+        }
+        if now.as_secs_f64() > limit {
+            break Ending::TimedOut(format!("time limit: {limit} s of simulated time"));
+        }
+        if setup.stop_after.is_some_and(|t| now.as_secs_f64() >= t) {
+            break Ending::Stopped;
+        }
+        job.act(None)?;
     };
-    let true_doors: Vec<Point2<f64>> = layout
-        .openings
-        .iter()
-        .filter(|o| o.kind == OpeningKind::OpenDoor)
-        .map(|o| Point2::from((o.edges[0].coords + o.edges[1].coords) / 2.0))
-        .map(|c| Point2::new(c.x - frame.origin[0], c.y - frame.origin[1]))
-        .collect();
-    let doors = est
-        .doors
-        .iter()
-        .map(|d| {
-            let g = WallGeometry::of(d.wall, est.room_m);
-            let c = Point2::from(g.point(d.position_m, 0.0));
-            DoorReport {
-                wall: d.wall,
-                position_m: d.position_m,
-                width_m: d.width_m,
-                error_m: true_doors
-                    .iter()
-                    .map(|t| (t - c).norm())
-                    .fold(f64::INFINITY, f64::min),
+    job.finish(ending)
+}
+
+/// How a job's loop ended.
+pub(crate) enum Ending {
+    /// The mission came to its end (done, failed, aborted).
+    Over,
+    /// It ran out of time.
+    TimedOut(String),
+    /// It was stopped as asked.
+    Stopped,
+}
+
+/// A mission's job on a simulated robot (in this process or served over
+/// zenoh): the robot and every sink its loop feeds (events, checkpoints,
+/// the world kept beside them, the recording, the scoring), stepped by
+/// `stucco run` as fast as it goes and by `stucco robot` paced to the
+/// clock.
+pub(crate) struct SimJob<'a, P: Simulated> {
+    setup: &'a Setup<'a>,
+    seed: u64,
+    out: Option<&'a Path>,
+    t0: Instant,
+    layout: Arc<Layout>,
+    pub(crate) robot: Robot<P>,
+    first_task: usize,
+    events: EventLog<Box<dyn Write + Send>>,
+    checkpoints: Option<Checkpointer>,
+    keeper: Option<WorldKeeper>,
+    recording: Option<Recording>,
+    run: SimRun<'a>,
+}
+
+impl<'a, P: Simulated> SimJob<'a, P> {
+    /// The job of `setup` with `seed` writing into `out`: the robot on the
+    /// platform `platform` makes of its world (where a checkpoint left it
+    /// when resuming a simulator in this process), with what the platform
+    /// carries, its executive `unattended` or not, the sinks opened. With
+    /// `keep_world` the simulated world is written beside every checkpoint
+    /// (a process that may be killed; 2 MB a checkpoint for a plastered
+    /// room), else when the job stops.
+    pub(crate) fn start(
+        setup: &'a Setup<'a>,
+        seed: u64,
+        out: Option<&'a Path>,
+        progress: &'a (dyn Fn(f64, &str) + Sync),
+        unattended: bool,
+        keep_world: bool,
+        platform: impl FnOnce(&WorldSpec) -> Result<(P, stucco_core::RobotSpec)>,
+    ) -> Result<Self> {
+        let Setup {
+            mission,
+            mission_path,
+            record,
+            world,
+            resume,
+            ..
+        } = *setup;
+        let t0 = Instant::now();
+        let layout = Arc::new(Layout::of(world));
+        let mut world = world.clone();
+        // A resumed run goes on in the world as it was left: the robot where
+        // it stopped, the plaster on the walls (a served simulator keeps its
+        // own).
+        let kept_world = match (resume, out) {
+            (Some(_), Some(dir)) if P::IN_PROCESS => {
+                Some(WorldState::load(&dir.join(WORLD_FILE)).map_err(|e| {
+                    BadInput(format!(
+                        "{}: the simulated world beside the checkpoint: {e:#}",
+                        dir.join(WORLD_FILE).display()
+                    ))
+                })?)
             }
-        })
-        .collect();
-    // Every room the robot has been in, each in its true frame.
-    let mut windows = Vec::new();
-    let (mut windows_found, mut windows_total) = (0, 0);
-    for (room, found) in windows_by_room(&nav, resume) {
-        let room_frame = match room {
-            Some(name) => RoomFrame::named(&layout, name)?,
-            None => frame.clone(),
+            _ => None,
         };
-        let (reports, hit, total) = score_windows(&layout, &room_frame, found);
-        windows.extend(reports);
-        windows_found += hit;
-        windows_total += total;
-    }
-    let window_edge_err_max_m = windows
-        .iter()
-        .filter_map(|w| w.edge_error_m)
-        .reduce(f64::max);
-    let plastered = (!plans.is_empty()).then(|| {
-        let rooms: Vec<(&RoomFrame, &stucco_plan::Plan)> =
-            plans.values().map(|(f, p, _)| (f, p)).collect();
-        let (score, each) = crate::plastering::score_run(nav.sim(), &layout, &rooms);
-        let top = stucco_sim::SimConfig::default().vehicle.max_speed_mps;
-        // The plastering time over every part of the run (a task stopped
-        // under way: so far).
-        let seconds = plans
-            .keys()
-            .filter_map(|t| task_spent.get(t).copied())
-            .reduce(|a, b| a + b);
-        let bound: f64 = plans
-            .values()
-            .map(|(_, plan, start)| crate::plastering::time_lower_bound(plan, start, top))
-            .sum();
-        let rooms: Vec<crate::plastering::RoomPlaster> = plans
+        if let Some(w) = &kept_world {
+            world.robot.at = [w.robot.x, w.robot.y];
+            world.robot.heading_deg = w.robot.theta.to_degrees();
+        }
+        let (platform, spec) = platform(&world)?;
+        let (mut robot, frame) = mission_robot(
+            mission,
+            &world,
+            resume.map(|cp| &cp.map),
+            unattended,
+            platform,
+            &spec,
+        )?;
+        if let Some(w) = &kept_world {
+            robot.platform_mut().restore(w);
+        }
+        robot.perception_mut().discover_doors(true);
+        if let Some(cp) = resume {
+            let exec = robot.executive_mut();
+            if cp.progress.plaster.is_some()
+                && let Some(dir) = out
+            {
+                let path = dir.join(PLAN_FILE);
+                let text = std::fs::read_to_string(&path).map_err(|e| {
+                    BadInput(format!(
+                        "{}: the plan the checkpoint was carrying out: {e}",
+                        path.display()
+                    ))
+                })?;
+                let plan: stucco_plan::Plan = serde_json::from_str(&text)
+                    .map_err(|e| BadInput(format!("{}: not a plan: {e}", path.display())))?;
+                exec.resume_plan(plan);
+            }
+            exec.resume_from(&cp.progress)
+                .map_err(|e| BadInput(format!("the checkpoint does not fit the mission: {e}")))?;
+        }
+        let tasks = robot.executive().tasks().len();
+        let first_task = robot
+            .executive()
+            .status()
             .iter()
-            .zip(each)
-            .map(|((&task, (frame, plan, _)), surfaces)| {
-                let predicted = stucco_plan::predicted_score(plan);
-                crate::plastering::RoomPlaster {
-                    room: frame.name.clone(),
-                    task,
-                    stations: plan.stations.len(),
-                    unreachable_m2: plan.unreachable_m2(),
-                    surfaces,
-                    predicted: crate::plastering::PredictedScores {
-                        wall_coverage_pct: predicted.wall_coverage_pct,
-                        ceiling_coverage_pct: predicted.ceiling_coverage_pct,
-                        thickness_cv: predicted.thickness_cv,
+            .position(|s| *s == TaskStatus::Pending)
+            .unwrap_or(tasks);
+        let events = match out {
+            Some(dir) => {
+                std::fs::create_dir_all(dir)
+                    .with_context(|| format!("cannot create {}", dir.display()))?;
+                let path = dir.join("events.jsonl");
+                let f = std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(resume.is_some())
+                    .write(true)
+                    .truncate(resume.is_none())
+                    .open(&path)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                EventLog::new(Box::new(std::io::BufWriter::new(f)) as Box<dyn Write + Send>)
+            }
+            None => EventLog::new(Box::new(std::io::sink()) as Box<dyn Write + Send>),
+        };
+        let checkpoints = match out {
+            Some(dir) => Some(Checkpointer::new(dir, mission, seed, resume)?),
+            None => None,
+        };
+        let recording = match (out, record) {
+            (Some(dir), true) => Some(Recording::new(
+                Recorder::create(
+                    &dir.join("run.mcap"),
+                    &RecordedMission {
+                        path: mission_path.display().to_string(),
+                        text: mission.text().to_owned(),
+                        plan_text: mission.plan_text().map(str::to_owned),
+                        seed,
+                        resumed_from: resume.map(|cp| cp.progress.clone()),
                     },
+                )?,
+                layout.clone(),
+                frame.clone(),
+            )),
+            _ => None,
+        };
+        let keeper = out.filter(|_| keep_world).map(WorldKeeper::new);
+        let mut plans = std::collections::BTreeMap::new();
+        if let (Some(_), Some(dir)) = (resume, out)
+            && dir.join(PLASTERED_FILE).exists()
+        {
+            let path = dir.join(PLASTERED_FILE);
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+            let kept: Vec<PlasteredRoom> = serde_json::from_str(&text).map_err(|e| {
+                BadInput(format!("{}: not the rooms plastered: {e}", path.display()))
+            })?;
+            for r in kept {
+                plans.insert(
+                    r.task,
+                    (RoomFrame::named(&layout, &r.room)?, r.plan, r.start),
+                );
+            }
+        }
+        let run = SimRun {
+            layout: layout.clone(),
+            out,
+            resume,
+            frame,
+            trace: Trace::default(),
+            times: TaskTimes::new(
+                tasks,
+                resume.map(|cp| cp.task_seconds.clone()).unwrap_or_default(),
+            ),
+            passes: std::collections::BTreeMap::new(),
+            room_changes: Vec::new(),
+            plans,
+            progress,
+        };
+        Ok(SimJob {
+            setup,
+            seed,
+            out,
+            t0,
+            layout,
+            robot,
+            first_task,
+            events,
+            checkpoints,
+            keeper,
+            recording,
+            run,
+        })
+    }
+
+    /// The job's sinks, then `extra`.
+    fn sinks<'s>(
+        events: &'s mut EventLog<Box<dyn Write + Send>>,
+        checkpoints: &'s mut Option<Checkpointer>,
+        keeper: &'s mut Option<WorldKeeper>,
+        recording: &'s mut Option<Recording>,
+        run: &'s mut SimRun<'a>,
+        extra: Option<&'s mut (dyn Sink<P> + 's)>,
+    ) -> Vec<&'s mut (dyn Sink<P> + 's)> {
+        let mut sinks: Vec<&mut dyn Sink<P>> = vec![events];
+        if let Some(c) = checkpoints.as_mut() {
+            sinks.push(c);
+        }
+        if let Some(k) = keeper.as_mut() {
+            sinks.push(k);
+        }
+        if let Some(r) = recording.as_mut() {
+            sinks.push(r);
+        }
+        sinks.push(run);
+        sinks.extend(extra);
+        sinks
+    }
+
+    /// [`Robot::tick`](stucco_runtime::Robot::tick) with the job's sinks
+    /// and `extra`.
+    pub(crate) fn tick<'s>(
+        &'s mut self,
+        telecommands: &[stucco_core::Telecommand],
+        extra: Option<&'s mut (dyn Sink<P> + 's)>,
+    ) -> Result<Outputs> {
+        let SimJob {
+            robot,
+            events,
+            checkpoints,
+            keeper,
+            recording,
+            run,
+            ..
+        } = self;
+        let mut sinks = Self::sinks(events, checkpoints, keeper, recording, run, extra);
+        robot.tick(telecommands, false, &mut sinks).map_err(sunk)
+    }
+
+    /// [`Robot::act`](stucco_runtime::Robot::act) with the job's sinks and
+    /// `extra`.
+    pub(crate) fn act<'s>(&'s mut self, extra: Option<&'s mut (dyn Sink<P> + 's)>) -> Result<()> {
+        let SimJob {
+            robot,
+            events,
+            checkpoints,
+            keeper,
+            recording,
+            run,
+            ..
+        } = self;
+        let mut sinks = Self::sinks(events, checkpoints, keeper, recording, run, extra);
+        robot.act(&mut sinks).map_err(sunk)
+    }
+
+    /// Ends the job as `ending` says: the last checkpoint and the world
+    /// beside it written, the run scored against the truth, its report
+    /// (and map, and coats) written into the job's folder.
+    pub(crate) fn finish(self, ending: Ending) -> Result<MissionReport> {
+        let SimJob {
+            setup,
+            seed,
+            out,
+            t0,
+            layout,
+            robot,
+            first_task,
+            events,
+            mut checkpoints,
+            recording,
+            run,
+            ..
+        } = self;
+        let Setup {
+            mission, resume, ..
+        } = *setup;
+        let (events_written, safety_stops) = (events.events(), events.safety_stops());
+        events.finish()?;
+        if let Some(r) = recording {
+            r.finish()?;
+        }
+        let SimRun {
+            frame,
+            trace,
+            times,
+            passes,
+            room_changes,
+            plans,
+            ..
+        } = run;
+        let task_spent = times.spent(robot.now());
+        if let Some(c) = checkpoints.as_mut() {
+            c.save(&robot).map_err(sunk)?;
+        }
+        if let Some(dir) = out {
+            robot
+                .platform()
+                .world_state()?
+                .save(&dir.join(WORLD_FILE))?;
+        }
+        let exec = robot.executive();
+        let est = robot.perception().mission_estimate();
+        let (outcome, reason) = match (exec.mode(), ending) {
+            (_, Ending::Stopped) => (
+                "stopped",
+                Some(format!(
+                    "stopped after {:.1} s as asked",
+                    robot.now().as_secs_f64()
+                )),
+            ),
+            (_, Ending::TimedOut(r)) => ("failed", Some(r)),
+            (MissionMode::Done, Ending::Over) => ("done", None),
+            (MissionMode::Aborted, Ending::Over) => {
+                ("aborted", Some("aborted by the operator".to_owned()))
+            }
+            (MissionMode::Failed { reason }, Ending::Over) => ("failed", Some(reason.clone())),
+            (other, Ending::Over) => ("failed", Some(format!("stopped while {other:?}"))),
+        };
+        let true_doors: Vec<Point2<f64>> = layout
+            .openings
+            .iter()
+            .filter(|o| o.kind == OpeningKind::OpenDoor)
+            .map(|o| Point2::from((o.edges[0].coords + o.edges[1].coords) / 2.0))
+            .map(|c| Point2::new(c.x - frame.origin[0], c.y - frame.origin[1]))
+            .collect();
+        let doors = est
+            .doors
+            .iter()
+            .map(|d| {
+                let g = WallGeometry::of(d.wall, est.room_m);
+                let c = Point2::from(g.point(d.position_m, 0.0));
+                DoorReport {
+                    wall: d.wall,
+                    position_m: d.position_m,
+                    width_m: d.width_m,
+                    error_m: true_doors
+                        .iter()
+                        .map(|t| (t - c).norm())
+                        .fold(f64::INFINITY, f64::min),
                 }
             })
             .collect();
-        (score, rooms, seconds, bound)
-    });
-    if let Some(dir) = out {
-        for (frame, plan, _) in plans.values() {
-            let prefix = if plans.len() > 1 {
-                format!("{}-", frame.name)
-            } else {
-                String::new()
+        // Every room the robot has been in, each in its true frame.
+        let mut windows = Vec::new();
+        let (mut windows_found, mut windows_total) = (0, 0);
+        for (room, found) in windows_by_room(robot.perception(), resume) {
+            let room_frame = match room {
+                Some(name) => RoomFrame::named(&layout, name)?,
+                None => frame.clone(),
             };
-            crate::plastering::draw_coats(dir, &prefix, &layout, frame, nav.sim(), &plan.tool)?;
+            let (reports, hit, total) = score_windows(&layout, &room_frame, found);
+            windows.extend(reports);
+            windows_found += hit;
+            windows_total += total;
         }
-    }
-    let wall = t0.elapsed().as_secs_f64();
-    let sim = nav.now().as_secs_f64();
-    let n = trace.n.max(1) as f64;
-    let report = MissionReport {
-        outcome: outcome.to_owned(),
-        reason,
-        mission: mission.name.clone(),
-        seed,
-        sim_seconds: sim,
-        wall_seconds: wall,
-        real_time_factor: sim / wall.max(1e-9),
-        tasks: exec
-            .tasks()
+        let window_edge_err_max_m = windows
             .iter()
-            .zip(exec.status())
-            .zip(&task_seconds)
-            .map(|((t, s), secs)| TaskReport {
-                name: t.name().to_owned(),
-                status: s.clone(),
-                seconds: *secs,
-            })
-            .collect(),
-        first_task,
-        pose_rms_m: (trace.pos2 / n).sqrt(),
-        pose_max_m: trace.pos_max,
-        heading_rms_rad: (trace.head2 / n).sqrt(),
-        consistency: trace.consistency.report(),
-        rpe_1m: stucco_nav::relative_pose_error(
-            &trace.poses.0,
-            &trace.poses.1,
-            stucco_nav::Pairs::Distance(1.0),
-        ),
-        room: nav.room_name().map(str::to_owned),
-        room_true: true_room(&layout, &nav.truth()),
-        room_changes,
-        room_m: est.room_m,
-        room_true_m: frame.size_m,
-        room_sigma_m: est.room_sigma_m,
-        walls_seen: est.walls_seen,
-        doors,
-        passes: passes
-            .into_iter()
-            .map(|(task, (wall, standoff_m, errs))| {
-                let n = errs.len().max(1) as f64;
-                PassReport {
-                    task,
-                    wall,
-                    standoff_m,
-                    mean_error_m: errs.iter().sum::<f64>() / n,
-                    rms_error_m: (errs.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
-                    max_error_m: errs.iter().fold(0.0, |m: f64, e| m.max(e.abs())),
-                    samples: errs.len(),
+            .filter_map(|w| w.edge_error_m)
+            .reduce(f64::max);
+        let rooms: Vec<(&RoomFrame, &stucco_plan::Plan)> =
+            plans.values().map(|(f, p, _)| (f, p)).collect();
+        // The plaster scored and drawn, from the simulator in this process
+        // or the served one's world.
+        let scored = if plans.is_empty() {
+            None
+        } else {
+            Some(robot.platform().with_plaster(|sim| {
+                if let Some(dir) = out {
+                    for (frame, plan, _) in plans.values() {
+                        let prefix = if plans.len() > 1 {
+                            format!("{}-", frame.name)
+                        } else {
+                            String::new()
+                        };
+                        crate::plastering::draw_coats(
+                            dir, &prefix, &layout, frame, sim, &plan.tool,
+                        )?;
+                    }
                 }
-            })
-            .collect(),
-        windows,
-        windows_found,
-        windows_total,
-        window_edge_err_max_m,
-        path_length_m: trace.length,
-        safety_stops,
-        events,
-        wall_coverage_pct: plastered.as_ref().map(|p| p.0.wall_coverage_pct),
-        ceiling_coverage_pct: plastered.as_ref().map(|p| p.0.ceiling_coverage_pct),
-        overspray_pct: plastered.as_ref().map(|p| p.0.overspray_pct),
-        thickness_cv: plastered.as_ref().map(|p| p.0.thickness_cv),
-        double_sprayed_pct: plastered.as_ref().map(|p| p.0.over_pct),
-        mission_time_s: plastered.as_ref().and_then(|p| p.2),
-        mission_time_lower_bound_s: plastered.as_ref().map(|p| p.3),
-        plaster: plastered.map(|(score, rooms, _, _)| {
-            let rooms_left = rooms_left(mission, &rooms);
-            crate::plastering::PlasterReport {
-                stations: rooms.iter().map(|r| r.stations).sum(),
-                unreachable_m2: rooms.iter().map(|r| r.unreachable_m2).sum(),
-                sprayed_l: score.sprayed_l,
-                rooms,
-                rooms_left,
-            }
-        }),
-    };
-    if let Some(dir) = out {
-        write_atomic(
-            &dir.join("report.json"),
-            serde_json::to_string_pretty(&report)?.as_bytes(),
-        )?;
-        draw_run(&dir.join("map.svg"), &layout, frame.origin, &trace, &est)?;
+                Ok(crate::plastering::score_run(sim, &layout, &rooms))
+            })?)
+        };
+        let plastered = scored.map(|(score, each)| {
+            let top = robot_spec().vehicle.max_speed_mps;
+            // The plastering time over every part of the run (a task stopped
+            // under way: so far).
+            let seconds = plans
+                .keys()
+                .filter_map(|t| task_spent.get(t).copied())
+                .reduce(|a, b| a + b);
+            let bound: f64 = plans
+                .values()
+                .map(|(_, plan, start)| crate::plastering::time_lower_bound(plan, start, top))
+                .sum();
+            let rooms: Vec<crate::plastering::RoomPlaster> = plans
+                .iter()
+                .zip(each)
+                .map(|((&task, (frame, plan, _)), surfaces)| {
+                    let predicted = stucco_plan::predicted_score(plan);
+                    crate::plastering::RoomPlaster {
+                        room: frame.name.clone(),
+                        task,
+                        stations: plan.stations.len(),
+                        unreachable_m2: plan.unreachable_m2(),
+                        surfaces,
+                        predicted: crate::plastering::PredictedScores {
+                            wall_coverage_pct: predicted.wall_coverage_pct,
+                            ceiling_coverage_pct: predicted.ceiling_coverage_pct,
+                            thickness_cv: predicted.thickness_cv,
+                        },
+                    }
+                })
+                .collect();
+            (score, rooms, seconds, bound)
+        });
+        let wall = t0.elapsed().as_secs_f64();
+        let sim = robot.now().as_secs_f64();
+        let n = trace.n.max(1) as f64;
+        let report = MissionReport {
+            outcome: outcome.to_owned(),
+            reason,
+            mission: mission.name.clone(),
+            seed,
+            sim_seconds: sim,
+            wall_seconds: wall,
+            real_time_factor: sim / wall.max(1e-9),
+            tasks: exec
+                .tasks()
+                .iter()
+                .zip(exec.status())
+                .enumerate()
+                .map(|(k, (t, s))| TaskReport {
+                    name: t.name().to_owned(),
+                    status: s.clone(),
+                    seconds: times.this_part().get(k).copied().flatten(),
+                })
+                .collect(),
+            first_task,
+            pose_rms_m: (trace.pos2 / n).sqrt(),
+            pose_max_m: trace.pos_max,
+            heading_rms_rad: (trace.head2 / n).sqrt(),
+            consistency: trace.consistency.report(),
+            rpe_1m: stucco_nav::relative_pose_error(
+                &trace.poses.0,
+                &trace.poses.1,
+                stucco_nav::Pairs::Distance(1.0),
+            ),
+            room: robot.perception().room_name().map(str::to_owned),
+            room_true: true_room(&layout, &SimRun::truth(&robot)),
+            room_changes,
+            room_m: est.room_m,
+            room_true_m: frame.size_m,
+            room_sigma_m: est.room_sigma_m,
+            walls_seen: est.walls_seen,
+            doors,
+            passes: passes
+                .into_iter()
+                .map(|(task, (wall, standoff_m, errs))| {
+                    let n = errs.len().max(1) as f64;
+                    PassReport {
+                        task,
+                        wall,
+                        standoff_m,
+                        mean_error_m: errs.iter().sum::<f64>() / n,
+                        rms_error_m: (errs.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+                        max_error_m: errs.iter().fold(0.0, |m: f64, e| m.max(e.abs())),
+                        samples: errs.len(),
+                    }
+                })
+                .collect(),
+            windows,
+            windows_found,
+            windows_total,
+            window_edge_err_max_m,
+            path_length_m: trace.length,
+            safety_stops,
+            events: events_written,
+            wall_coverage_pct: plastered.as_ref().map(|p| p.0.wall_coverage_pct),
+            ceiling_coverage_pct: plastered.as_ref().map(|p| p.0.ceiling_coverage_pct),
+            overspray_pct: plastered.as_ref().map(|p| p.0.overspray_pct),
+            thickness_cv: plastered.as_ref().map(|p| p.0.thickness_cv),
+            double_sprayed_pct: plastered.as_ref().map(|p| p.0.over_pct),
+            mission_time_s: plastered.as_ref().and_then(|p| p.2),
+            mission_time_lower_bound_s: plastered.as_ref().map(|p| p.3),
+            plaster: plastered.map(|(score, rooms, _, _)| {
+                let rooms_left = rooms_left(mission, &rooms);
+                crate::plastering::PlasterReport {
+                    stations: rooms.iter().map(|r| r.stations).sum(),
+                    unreachable_m2: rooms.iter().map(|r| r.unreachable_m2).sum(),
+                    sprayed_l: score.sprayed_l,
+                    rooms,
+                    rooms_left,
+                }
+            }),
+        };
+        if let Some(dir) = out {
+            write_atomic(
+                &dir.join("report.json"),
+                serde_json::to_string_pretty(&report)?.as_bytes(),
+            )?;
+            draw_run(&dir.join("map.svg"), &layout, frame.origin, &trace, &est)?;
+        }
+        Ok(report)
     }
-    Ok(report)
-}
-
-fn write_event(file: &mut Option<impl Write>, e: &Event) -> Result<()> {
-    if let Some(f) = file {
-        serde_json::to_writer(&mut *f, e)?;
-        f.write_all(b"\n")?;
-    }
-    Ok(())
 }
 
 /// The estimated and true trajectories (world frame) and their errors.
@@ -1265,15 +1277,18 @@ fn draw_run(
     )
 }
 
-/// The robot of `mission` on `world` (put where `world` says) with
-/// `seed`: its filter started as `[start]` says, or from the map a
-/// checkpoint kept; and the true frame of the room it starts in.
-pub(crate) fn mission_navigator(
+/// The robot of `mission` on `platform` (carrying what `spec` says), put
+/// where `world` says: its filter started as `[start]` says, or from the
+/// map a checkpoint kept, its executive `unattended` or not; and the true
+/// frame of the room it starts in.
+pub(crate) fn mission_robot<P: Platform>(
     mission: &Mission,
     world: &WorldSpec,
-    seed: u64,
     resume: Option<&RoomMap>,
-) -> Result<(Navigator, RoomFrame)> {
+    unattended: bool,
+    platform: P,
+    spec: &stucco_core::RobotSpec,
+) -> Result<(Robot<P>, RoomFrame)> {
     let known = mission
         .start
         .as_ref()
@@ -1314,8 +1329,9 @@ pub(crate) fn mission_navigator(
             [known.room_sigma_m; 2],
         ),
     };
-    let sprayer = mission.spray.as_ref().map(crate::plastering::sprayer_of);
-    let mut nav = Navigator::with_sprayer(world, seed, x0, size_sigma, sprayer)?;
+    let exec = mission.executive(spec, unattended);
+    let mut robot = robot_on(platform, spec, x0, size_sigma, exec)?;
+    let nav = robot.perception_mut();
     // The doors it knew, before the plan's (those it holds are not added
     // twice).
     for d in resume.iter().flat_map(|m| &m.doors) {
@@ -1331,7 +1347,7 @@ pub(crate) fn mission_navigator(
         }
         nav.follow_plan(plan, room, known.room_sigma_m);
     }
-    Ok((nav, frame))
+    Ok((robot, frame))
 }
 
 /// The plan's room the robot is in at the start (or was in at a

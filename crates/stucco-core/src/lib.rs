@@ -7,7 +7,8 @@
 //!   no-return marking.
 //! - [`LaserSpec`]: the range-finders of the source papers as presets
 //!   (IBEO Ladar-2D, Hokuyo URG, Hokuyo UTM-30, SICK LMS291).
-//! - [`VehicleSpec`]: the papers' tricycle, its limits and sensor mounts.
+//! - [`VehicleSpec`]: the papers' tricycle, its limits and sensor mounts;
+//!   [`CameraSpec`]: a range camera; [`RobotSpec`]: all a robot carries.
 //! - [`Platform`]: the port to a robot or the simulator — [`DriveCommand`]
 //!   in, [`Readings`] ([`EncoderSample`], [`Scan`], [`RangeProfile`],
 //!   bumper) out, time advanced by the caller.
@@ -31,6 +32,7 @@ mod laser;
 mod operator;
 mod platform;
 mod pose;
+mod robot;
 mod scan;
 mod spray;
 mod stamp;
@@ -41,8 +43,9 @@ pub use laser::{BeamWidth, LaserSpec};
 pub use operator::{
     Ack, Command, Landmark, Region, Reply, Side, SurfaceName, Telecommand, WallName,
 };
-pub use platform::{DriveCommand, EncoderSample, Platform, RangeProfile, Readings};
+pub use platform::{DriveCommand, EncoderSample, Platform, PlatformError, RangeProfile, Readings};
 pub use pose::{Pose2, Twist2, wrap_angle};
+pub use robot::{CameraSpec, RobotSpec, TOOL_CAMERA};
 pub use scan::{Beam, Scan};
 pub use spray::{
     Aim, FOOTPRINT_REACH_SIGMAS, SurfaceFrame, SurfaceHit, ThicknessGrid, ToolCommand, normal_cdf,

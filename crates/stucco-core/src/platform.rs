@@ -55,12 +55,15 @@ pub struct RangeProfile {
     pub azimuth_rad: f64,
     /// Elevation of each ray above the horizontal, rad.
     pub elevations_rad: Vec<f64>,
-    /// Range along each ray, m; `INFINITY` for no return.
+    /// Range along each ray, m; `INFINITY` for no return (`null` in
+    /// JSON).
+    #[serde(with = "crate::scan::no_return_as_null")]
     pub ranges_m: Vec<f64>,
 }
 
 /// What arrived from the platform's sensors since the last step.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Readings {
     /// Encoder samples, oldest first.
     pub encoders: Vec<EncoderSample>,
@@ -87,6 +90,19 @@ pub trait Platform {
     fn tool(&mut self, cmd: ToolCommand);
 
     /// Advances the platform by `dt_s` seconds and returns what its sensors
-    /// delivered meanwhile.
-    fn advance(&mut self, dt_s: f64) -> Readings;
+    /// delivered meanwhile; fails when the platform is gone (its driver
+    /// stopped, its link lost): the robot's loop stops.
+    fn advance(&mut self, dt_s: f64) -> Result<Readings, PlatformError>;
 }
+
+/// Why a platform could not advance: what its driver or link said.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PlatformError(pub String);
+
+impl std::fmt::Display for PlatformError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "the platform: {}", self.0)
+    }
+}
+
+impl std::error::Error for PlatformError {}

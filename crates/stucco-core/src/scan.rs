@@ -30,7 +30,7 @@ pub struct Scan {
 }
 
 /// JSON has no infinity: no-returns travel as `null`.
-mod no_return_as_null {
+pub(crate) mod no_return_as_null {
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
     pub fn serialize<S: Serializer>(ranges: &[f64], s: S) -> Result<S::Ok, S::Error> {

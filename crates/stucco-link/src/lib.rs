@@ -24,13 +24,18 @@
 //! JSON for everything but scans, so any zenoh client (Python, C, the
 //! zenoh CLI tools) can command and watch a robot.
 //!
+//! A robot's body reached over zenoh (`stucco/NAME/platform/...`): see
+//! [`platform`].
+//!
 //! What zenoh's access control refuses reaches the robot through
 //! [`audit`]: [`RobotLink::denials`].
 
 pub mod audit;
+pub mod platform;
 pub mod scan;
 
 pub use audit::Denial;
+pub use platform::{PlatformServer, ZenohPlatform};
 pub use scan::{ScanDecodeError, ScanFrame};
 use serde::Serialize;
 use std::sync::mpsc::Receiver;

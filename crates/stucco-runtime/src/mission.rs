@@ -3,16 +3,14 @@
 //! one of the navigation experiments of paper A, run by `stucco run`. Every
 //! table is `deny_unknown_fields`; errors name the file, line and column.
 
-use anyhow::Result;
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use stucco_control::GainSchedule;
-use stucco_core::Pose2;
+use stucco_core::{Pose2, RobotSpec};
 use stucco_mission::{
     Executive, ExecutiveConfig, FloorPlan, PlanDoor, PlanRoom, SafetyConfig, TaskSpec,
 };
-use stucco_sim::{SimConfig, WorldSpec};
 
 /// Input that cannot be used as it is (a mission file, a checkpoint):
 /// `stucco run` exits with 2 on it.
@@ -20,10 +18,14 @@ use stucco_sim::{SimConfig, WorldSpec};
 #[error("{0}")]
 pub struct BadInput(pub String);
 
+/// What a mission file's reading gives: the value, or what is wrong with
+/// the file and where.
+pub type Result<T, E = BadInput> = std::result::Result<T, E>;
+
 /// Fails with [`BadInput`].
 macro_rules! bad {
     ($($arg:tt)*) => {
-        return Err(BadInput(format!($($arg)*)).into())
+        return Err(BadInput(format!($($arg)*)))
     };
 }
 
@@ -33,9 +35,12 @@ macro_rules! bad {
 pub struct Mission {
     /// Name, for reports.
     pub name: String,
-    /// The world file, relative to the mission file.
-    pub world: PathBuf,
-    /// Seed of the first run; run `k` uses `seed + k`.
+    /// The simulated world the mission runs in, relative to the mission
+    /// file (a job in the simulator needs one; a real robot's does not).
+    #[serde(default)]
+    pub world: Option<PathBuf>,
+    /// Seed of the first simulated run; run `k` uses `seed + k`.
+    #[serde(default)]
     pub seed: u64,
     /// Runs when `--runs` is not given.
     #[serde(default = "one")]
@@ -298,7 +303,7 @@ impl Mission {
         }
         if let Some(tool) = &mission.spray
             && let Err(stucco_plan::PlanError::Tool { field, why }) =
-                tool.validate(SimConfig::default().vehicle.width_m)
+                tool.validate(RobotSpec::default().vehicle.width_m)
         {
             bad!(
                 "{}:{}: [spray] {field}: {why}",
@@ -513,21 +518,10 @@ impl Mission {
         None
     }
 
-    /// The mission's world (from `mission_path`'s folder), its people
-    /// removed when the mission closes the site to them.
-    pub fn load_world(&self, mission_path: &Path) -> Result<WorldSpec> {
-        let mut world = WorldSpec::load(&self.world_path(mission_path))
-            .map_err(|e| BadInput(format!("the world of {}: {e:#}", mission_path.display())))?;
-        if !self.people {
-            world.people.clear();
-        }
-        Ok(world)
-    }
-
-    /// The executive for the mission's tasks, its failsafe, the simulated
-    /// robot; `unattended` when no operator is there to answer.
-    pub fn executive(&self, unattended: bool) -> Executive {
-        let robot = SimConfig::default();
+    /// The executive for the mission's tasks and its failsafe, on `robot`;
+    /// `unattended` when no operator is there to answer.
+    pub fn executive(&self, robot: &RobotSpec, unattended: bool) -> Executive {
+        let robot = robot.clone();
         Executive::new(
             ExecutiveConfig {
                 vehicle: robot.vehicle,
@@ -542,11 +536,18 @@ impl Mission {
         )
     }
 
-    /// The world file, resolved against the mission file's folder.
-    pub fn world_path(&self, mission_path: &Path) -> PathBuf {
-        mission_path
+    /// The world file, resolved against the mission file's folder; a
+    /// mission naming none cannot run in the simulator.
+    pub fn world_path(&self, mission_path: &Path) -> Result<PathBuf> {
+        let Some(world) = &self.world else {
+            bad!(
+                "{}: no `world`: a job in the simulator needs the world file it runs in",
+                mission_path.display()
+            )
+        };
+        Ok(mission_path
             .parent()
-            .map_or_else(|| self.world.clone(), |d| d.join(&self.world))
+            .map_or_else(|| world.clone(), |d| d.join(world)))
     }
 }
 
@@ -585,7 +586,7 @@ fn line_of_array(text: &str, table: &str, n: usize, key: &str) -> usize {
 /// value (toml's message gives only the type it expected), and what was
 /// expected. TOML reads `nan` and `inf`; no number in these files may be
 /// one (every range check compares false with `nan`).
-pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
+pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T> {
     let parsed = toml::from_str(text).map_err(|e| {
         let (line, column) = e
             .span()
@@ -611,8 +612,7 @@ pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path
             bad.line,
             bad.column,
             bad.field
-        ))
-        .into()),
+        ))),
         None => Ok(parsed),
     }
 }
@@ -620,7 +620,7 @@ pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path
 /// The line of `key` in `table` (`""`: the top level; its sub-tables count
 /// as inside it), or of the table's header when the key is not written
 /// there; 0 when neither is.
-pub(crate) fn line_of(text: &str, table: &str, key: &str) -> usize {
+pub fn line_of(text: &str, table: &str, key: &str) -> usize {
     let mut current = String::new();
     let mut header = 0;
     for (i, raw) in text.lines().enumerate() {

@@ -1,11 +1,12 @@
-//! The robot's loop in the simulator, as the experiments close it: the
-//! encoders and the room search's walls and doors feed the room filter, a
-//! law's command goes through the vehicle's limits, the truth stays aside
-//! (read only to score).
+//! Perception: what the platform's sensors deliver (encoders, laser scans,
+//! range-camera profiles) turned into the estimate the executive reads —
+//! scans deskewed, walls and doors found in them, the room filter updated
+//! at each scan's own stamp, windows and the ceiling found by the cameras,
+//! what stands on the floor mapped. It knows nothing of where its readings
+//! come from: the simulator and a real robot feed it alike.
 
 use nalgebra::{DVector, Matrix2, Point2, SVector};
-use stucco_control::Limiter;
-use stucco_core::{DriveCommand, EncoderSample, Platform, Pose2, Stamp, ToolCommand, Twist2};
+use stucco_core::{EncoderSample, Pose2, Readings, RobotSpec, Stamp, TOOL_CAMERA, Twist2};
 use stucco_mission::{DoorEstimate, Estimate, FloorPlan, WallGeometry, WallName, WindowEstimate};
 use stucco_nav::{
     DoorConfig, DoorOpening, OdometryConfig, ProfilePose, RoomConfig, RoomCovariance, RoomEkf,
@@ -13,19 +14,17 @@ use stucco_nav::{
     find_doors_moving, sensor_twist, twist_at, wheel_travel_at,
 };
 use stucco_plan::Obstacle;
-use stucco_sim::{CameraSpec, TOOL_CAMERA};
-use stucco_sim::{Layout, SimConfig, Simulator, SprayerSpec, WorldSpec};
 
 /// Control period, s.
 pub const DT_S: f64 = 0.02;
 
-/// A simulated robot navigating a building room by room with the room
-/// filter: one room's frame at a time, moved into the next room through
-/// a door of the floor plan when the mission has one.
-pub struct Navigator {
-    sim: Simulator,
+/// A robot's perception as it navigates a building room by room with the
+/// room filter: one room's frame at a time, moved into the next room
+/// through a door of the floor plan when the mission has one.
+pub struct Perception {
+    /// The platform's time as of the last readings taken in.
+    now: Stamp,
     search: RoomSearch,
-    limiter: Limiter,
     odometry: OdometryConfig,
     mount: Pose2,
     samples: Vec<EncoderSample>,
@@ -39,8 +38,8 @@ pub struct Navigator {
     /// Longest a scan has taken to come in after its stamp, s: no scan
     /// still to come is stamped before now less this.
     scan_lag_s: f64,
-    /// The range camera, if the robot has one.
-    camera: Option<CameraSpec>,
+    /// Whether the robot has a range camera on its body.
+    body_camera: bool,
     /// The executive is looking at a wall with the camera on the spray
     /// tool.
     tool_look: bool,
@@ -199,35 +198,18 @@ struct DoorCandidate {
     sightings: usize,
 }
 
-impl Navigator {
-    /// The robot of `world` with `seed`, its filter starting at `x0` with
-    /// a few centimetres and a degree of uncertainty on the pose and
-    /// `size_sigma_m` on the room's size.
+impl Perception {
+    /// The perception of `robot`, its filter starting at `x0` (room
+    /// frame) with a few centimetres and a degree of uncertainty on the
+    /// pose and `size_sigma_m` on the room's size, at `now`.
     pub fn new(
-        world: &WorldSpec,
-        seed: u64,
+        robot: &RobotSpec,
         x0: RoomState,
         size_sigma_m: [f64; 2],
-    ) -> anyhow::Result<Self> {
-        Self::with_sprayer(world, seed, x0, size_sigma_m, None)
-    }
-
-    /// As [`Navigator::new`], the robot carrying `sprayer`.
-    pub fn with_sprayer(
-        world: &WorldSpec,
-        seed: u64,
-        x0: RoomState,
-        size_sigma_m: [f64; 2],
-        sprayer: Option<SprayerSpec>,
-    ) -> anyhow::Result<Self> {
-        let cfg = SimConfig {
-            sprayer,
-            ..SimConfig::default()
-        };
-        let vehicle = cfg.vehicle.clone();
-        let cfg_laser = cfg.laser.clone();
-        let camera = cfg.camera.clone();
-        let odometry = OdometryConfig::for_vehicle(&vehicle);
+        now: Stamp,
+    ) -> Result<Self, stucco_nav::NavError> {
+        let vehicle = &robot.vehicle;
+        let odometry = OdometryConfig::for_vehicle(vehicle);
         let p0 = RoomCovariance::from_diagonal(&SVector::<f64, 5>::new(
             4e-4,
             4e-4,
@@ -235,44 +217,28 @@ impl Navigator {
             size_sigma_m[0].powi(2),
             size_sigma_m[1].powi(2),
         ));
-        Ok(Navigator {
-            sim: Simulator::new(world, cfg, Some(seed)),
+        Ok(Perception {
+            now,
             search: RoomSearch::new(RoomConfig::default())?,
-            limiter: Limiter::new(&vehicle),
             odometry: odometry.clone(),
             mount: vehicle.laser_mount,
             samples: Vec::new(),
-            doors: DoorConfig::for_laser(&cfg_laser),
+            doors: DoorConfig::for_laser(&robot.laser),
             obstacles: Vec::new(),
             discover_doors: false,
             scans: 0,
-            scan_lag_s: cfg_laser.sweep_duration_s() + DT_S,
-            camera,
+            scan_lag_s: robot.laser.sweep_duration_s() + DT_S,
+            body_camera: robot.camera.is_some(),
             tool_look: false,
             room: RoomView::new(RoomEkf::new(
                 RoomEkfConfig::new(odometry, vehicle.laser_mount),
                 x0,
                 p0,
-                Stamp::ZERO,
+                now,
             )),
             plan: None,
             parked: std::collections::BTreeMap::new(),
         })
-    }
-
-    /// The simulator (for its truth: the plaster laid, scoring only).
-    pub fn sim(&self) -> &Simulator {
-        &self.sim
-    }
-
-    /// The simulator, to put back the state of a resumed run.
-    pub fn sim_mut(&mut self) -> &mut Simulator {
-        &mut self.sim
-    }
-
-    /// The spray tool's command to hold.
-    pub fn tool(&mut self, cmd: ToolCommand) {
-        self.sim.tool(cmd);
     }
 
     /// The ceiling's height as the camera measured it (median), m.
@@ -391,14 +357,9 @@ impl Navigator {
         self.discover_doors = on;
     }
 
-    /// The simulator's time.
+    /// The platform's time as of the last readings taken in.
     pub fn now(&self) -> Stamp {
-        self.sim.now()
-    }
-
-    /// The world's static layout (for scoring and drawing).
-    pub fn layout(&self) -> &Layout {
-        self.sim.layout()
+        self.now
     }
 
     /// Scans taken in so far.
@@ -417,7 +378,7 @@ impl Navigator {
         self.mission_estimate_with_covariance().0
     }
 
-    /// [`Navigator::mission_estimate`] with the covariance of its pose's
+    /// [`Perception::mission_estimate`] with the covariance of its pose's
     /// error `(x, y, θ)`, room frame, from the one prediction to now.
     pub fn mission_estimate_with_covariance(&self) -> (Estimate, nalgebra::Matrix3<f64>) {
         let (x, p) = self.room.ekf.estimate_now();
@@ -441,7 +402,7 @@ impl Navigator {
             })
             .collect();
         let estimate = Estimate {
-            stamp: self.sim.now(),
+            stamp: self.now,
             pose: Pose2::new(x[0], x[1], x[2]),
             position_sigma_m: worst.sqrt(),
             heading_sigma_rad: p[(2, 2)].max(0.0).sqrt(),
@@ -530,7 +491,7 @@ impl Navigator {
         result.map(|_| ())
     }
 
-    /// [`Navigator::enter_through`] with the plan taken out: the room
+    /// [`Perception::enter_through`] with the plan taken out: the room
     /// entered.
     fn move_frame(
         &mut self,
@@ -575,7 +536,7 @@ impl Navigator {
         p0[(0, 0)] += door_var + sigma * sigma;
         p0[(1, 1)] += door_var + sigma * sigma;
         let config = RoomEkfConfig::new(self.odometry.clone(), self.mount);
-        let stamp = self.sim.now();
+        let stamp = self.now;
         let entered = match self.parked.remove(&next) {
             // Back in a room: what was learnt of it stays, the pose is new.
             Some(mut view) => {
@@ -618,33 +579,14 @@ impl Navigator {
         Ok(next)
     }
 
-    /// The true pose (for scoring only).
-    pub fn truth(&self) -> Pose2 {
-        self.sim.truth().drive.pose
-    }
-
-    /// One control period at `speed_mps` with steering `steer_rad`;
-    /// returns the true pose after it, or `None` when the robot touched
-    /// something (an experiment's lane must be clear).
-    pub fn step(&mut self, speed_mps: f64, steer_rad: f64) -> Option<Pose2> {
-        let bumped = self.drive(DriveCommand {
-            speed_mps,
-            steer_rad,
-        });
-        (!bumped).then(|| self.truth())
-    }
-
-    /// One control period with `cmd` (through the vehicle's limits);
-    /// true when a bumper touched something.
-    pub fn drive(&mut self, cmd: DriveCommand) -> bool {
-        let cmd = self.limiter.limit(cmd, DT_S);
-        self.sim.command(cmd);
-        let r = self.sim.advance(DT_S);
+    /// Takes in what the platform's sensors delivered over the control
+    /// period that ended at `now`.
+    pub fn take(&mut self, r: &Readings, now: Stamp) {
+        self.now = now;
         for e in &r.encoders {
             self.room.ekf.odometry(*e);
             self.samples.push(*e);
         }
-        let now = self.sim.now();
         for scan in &r.scans {
             self.scans += 1;
             self.scan_lag_s = self.scan_lag_s.max(now.seconds_since(scan.stamp));
@@ -693,7 +635,6 @@ impl Navigator {
                 self.samples.drain(..k);
             }
         }
-        r.bumper || self.sim.truth().bumper
     }
 
     /// The windows found by the camera, wall by wall.
@@ -741,7 +682,7 @@ impl Navigator {
     /// pass.
     fn look_for_windows(&mut self, profile: &stucco_core::RangeProfile) {
         let on_tool = profile.sensor == TOOL_CAMERA;
-        if (on_tool && !self.tool_look) || (!on_tool && self.camera.is_none()) {
+        if (on_tool && !self.tool_look) || (!on_tool && !self.body_camera) {
             return;
         }
         // Where the robot was when the profile was shot, not at the end of
@@ -1091,10 +1032,14 @@ mod tests {
         assert_eq!(out.len(), 2);
     }
 
-    /// A robot at the apartment's start (seed 7), knowing the living room,
-    /// and where it starts.
+    use crate::Robot;
+    use stucco_core::{DriveCommand, Platform};
+    use stucco_sim::{SimConfig, Simulator, WorldSpec};
+
+    /// A robot at the apartment's start (seed 7) in the simulator, knowing
+    /// the living room, and where it starts; its executive idles.
     #[allow(clippy::expect_used)]
-    fn at_the_apartments_start() -> (Navigator, Pose2) {
+    fn at_the_apartments_start() -> (Robot<Simulator>, Pose2) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../sim/worlds/apartment.toml");
         let world = WorldSpec::load(&path).expect("the apartment");
@@ -1104,8 +1049,38 @@ mod tests {
             world.robot.heading_deg.to_radians(),
         );
         let x0 = RoomState::new(start.x, start.y, start.theta, 5.0, 2.85);
-        let nav = Navigator::new(&world, 7, x0, [0.01, 0.01]).expect("a robot");
-        (nav, start)
+        let cfg = SimConfig::default();
+        let spec = cfg.robot();
+        let sim = Simulator::new(&world, cfg, Some(7));
+        let perception =
+            Perception::new(&spec, x0, [0.01, 0.01], sim.now()).expect("valid settings");
+        let idle = stucco_mission::Executive::new(
+            stucco_mission::ExecutiveConfig {
+                vehicle: spec.vehicle.clone(),
+                gains: stucco_control::GainSchedule::default(),
+                safety: stucco_mission::SafetyConfig::default(),
+                unattended: true,
+                spray: None,
+                floor: None,
+                body_camera_azimuth_rad: None,
+            },
+            Vec::new(),
+        );
+        let limiter = stucco_control::Limiter::new(&spec.vehicle);
+        (Robot::new(sim, perception, idle, limiter), start)
+    }
+
+    /// One control period at `speed_mps` steering `steer_rad`; the true
+    /// pose after it.
+    #[allow(clippy::expect_used)]
+    fn drive(robot: &mut Robot<Simulator>, speed_mps: f64, steer_rad: f64) -> Pose2 {
+        let cmd = DriveCommand {
+            speed_mps,
+            steer_rad,
+        };
+        let bumped = robot.drive(cmd, &mut []).expect("no sink");
+        assert!(!bumped, "the robot touched something");
+        robot.platform().truth().drive.pose
     }
 
     /// The robot pivots at 1 rad/s from the apartment's start, where no
@@ -1116,19 +1091,19 @@ mod tests {
     /// as they came, each scan was fused against a state 0.1 s on, and a
     /// pivot left the heading degrees off.)
     #[test]
-    #[allow(clippy::expect_used)]
     fn a_fast_pivot_with_the_camera_measuring_walls_keeps_the_heading() {
-        let (mut nav, start) = at_the_apartments_start();
-        assert!(nav.camera.is_some());
+        let (mut robot, start) = at_the_apartments_start();
+        assert!(robot.perception().body_camera);
         let mut worst = 0.0f64;
+        let mut truth = start;
         // Turning left at 0.6 m/s of the front wheel for 3 s, then still.
         for k in 0..200 {
             let speed = if k < 150 { 0.6 } else { 0.0 };
-            nav.step(speed, std::f64::consts::FRAC_PI_2).expect("clear");
-            let off = stucco_core::wrap_angle(nav.estimate()[2] - nav.truth().theta);
+            truth = drive(&mut robot, speed, std::f64::consts::FRAC_PI_2);
+            let off = stucco_core::wrap_angle(robot.perception().estimate()[2] - truth.theta);
             worst = worst.max(off.abs());
         }
-        let turned = stucco_core::wrap_angle(nav.truth().theta - start.theta);
+        let turned = stucco_core::wrap_angle(truth.theta - start.theta);
         assert!(turned.abs() > 1.0, "turned {turned}");
         assert!(
             worst < 0.3f64.to_radians(),
@@ -1143,13 +1118,13 @@ mod tests {
     /// turn the robot truly made since (20 mrad), to within a tenth of it
     /// (the encoders' ticks and the wheels' slip over 20 ms).
     #[test]
-    #[allow(clippy::expect_used)]
     fn a_profile_shot_in_a_pivot_gets_the_pose_it_was_shot_from() {
-        let (mut nav, _) = at_the_apartments_start();
+        let (mut robot, _) = at_the_apartments_start();
         let (mut worst, mut least_turn) = (0.0f64, f64::INFINITY);
         let mut before: Option<(Stamp, Pose2)> = None;
         for k in 0..150 {
-            let truth = nav.step(0.6, std::f64::consts::FRAC_PI_2).expect("clear");
+            let truth = drive(&mut robot, 0.6, std::f64::consts::FRAC_PI_2);
+            let nav = robot.perception();
             let est = nav.mission_estimate();
             if let Some((then, truth_then)) = before
                 && k > 50
