@@ -28,6 +28,7 @@ mod plan_view;
 mod plastering;
 mod record;
 mod robot;
+mod room_frame;
 mod sim_robot;
 mod sim_serve;
 mod simbench;
@@ -46,7 +47,8 @@ pub use log_replay::{
 pub use logging::init_logging;
 pub use op::{BenchReport, CommandResult, EventFeed, Operator};
 pub use plastering::{
-    PlasterReport, PredictedScores, RoomPlaster, WorldState, sprayer_of, time_lower_bound,
+    PlasterReport, PredictedScores, RoomPlaster, WORLD_FILE, WorldState, sprayer_of,
+    time_lower_bound,
 };
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{PlatformKind, RobotJob, RobotRun, RobotState, run_robot};
@@ -63,7 +65,7 @@ pub use stucco_runtime::{
 };
 pub use study::{Axes, Axis, Compare, SettingReport, Study, StudyJob, StudyReport, run_study};
 pub use task_mission::{
-    DoorReport, MissionReport, MissionSummary, RoomChange, TaskMissionJob, TaskReport, WORLD_FILE,
+    DoorReport, MissionReport, MissionSummary, RoomChange, TaskMissionJob, TaskReport,
     run_task_mission,
 };
 pub use walls::{

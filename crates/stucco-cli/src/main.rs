@@ -1004,7 +1004,7 @@ fn main() -> ExitCode {
                 platform,
                 platform_timeout: std::time::Duration::from_secs_f64(platform_timeout),
             };
-            match run_robot(&job, &Arc::new(AtomicBool::new(false))) {
+            match run_robot(&job, &stop_on_signal()) {
                 Ok(run) => {
                     eprintln!(
                         "robot {}: mission {}, {:.1} s simulated, {} message(s) refused by access control",
@@ -1049,7 +1049,7 @@ fn main() -> ExitCode {
                 speed,
                 stop_after_s: stop_after,
             };
-            match serve(&job, &AtomicBool::new(false)) {
+            match serve(&job, &stop_on_signal()) {
                 Ok(run) => {
                     eprintln!(
                         "platform {}: {} periods, {:.1} s simulated, {} command(s) refused",
@@ -1316,4 +1316,18 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// A flag set when the process is asked to stop (Ctrl-C, SIGTERM): a
+/// robot ends its loop at a period's end, writes its last checkpoint and
+/// report, and leaves.
+fn stop_on_signal() -> Arc<AtomicBool> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    if let Err(e) =
+        ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed))
+    {
+        eprintln!("warning: Ctrl-C will kill the process at once: {e}");
+    }
+    stop
 }

@@ -3,7 +3,7 @@
 //! true surfaces of the robot's room, the world's plaster kept across a
 //! kill, and a thickness map per surface.
 
-use crate::task_mission::RoomFrame;
+use crate::room_frame::RoomFrame;
 use anyhow::{Context, Result};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -234,6 +234,11 @@ pub fn time_lower_bound(plan: &Plan, start: &stucco_core::Pose2, top_speed_mps: 
     }
     area / plan.tool.area_rate_m2ps() + travel / top_speed_mps
 }
+
+/// The simulated world's state (the plaster, where the robot stands) in a
+/// job's folder, written with every checkpoint: a resumed run goes on in
+/// it.
+pub const WORLD_FILE: &str = "world.json";
 
 /// The simulated world's state, written with every checkpoint and kept
 /// across a kill: the plaster stays on the walls and the robot stands

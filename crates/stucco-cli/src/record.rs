@@ -16,8 +16,8 @@
 //! executive built from `/mission` and compares its commands with
 //! `/executive/outputs`, tick by tick.
 
+use crate::room_frame::RoomFrame;
 use crate::sim_robot::Simulated;
-use crate::task_mission::RoomFrame;
 use anyhow::{Context, Result, anyhow};
 use mcap::records::MessageHeader;
 use nalgebra::Point2;
@@ -256,11 +256,8 @@ impl<P: Simulated> Sink<P> for Recording {
         _door: usize,
         _moved: &std::result::Result<(), String>,
     ) -> std::result::Result<(), SinkError> {
-        if let Some(name) = robot.perception().room_name()
-            && name != self.frame.name
-        {
-            self.frame = RoomFrame::named(&self.layout, name)?;
-        }
+        self.frame
+            .follow(&self.layout, robot.perception().room_name())?;
         Ok(())
     }
 }

@@ -3,8 +3,7 @@
 //! truth ([`Simulated`]), and the experiments' robot, driven by a control
 //! law from outside the executive.
 
-use crate::plastering::WorldState;
-use crate::task_mission::WORLD_FILE;
+use crate::plastering::{WORLD_FILE, WorldState};
 use anyhow::{Context, Result};
 use nalgebra::DVector;
 use std::path::{Path, PathBuf};

@@ -5,9 +5,10 @@
 //! started again with `--resume` goes on where it stopped.
 
 use crate::plan_view::{PlanPath, PlanSegment, draw_plan};
-use crate::plastering::WorldState;
+use crate::plastering::{WORLD_FILE, WorldState};
 use crate::record::Recording;
 use crate::record::{RecordedMission, Recorder};
+pub(crate) use crate::room_frame::RoomFrame;
 use crate::sim_robot::{Simulated, WorldKeeper, mission_simulator, robot_on, robot_spec};
 use anyhow::{Context, Result};
 use nalgebra::{Matrix3, Point2, SVector, Vector3};
@@ -150,9 +151,6 @@ fn rooms_left(
 
 /// An opening the camera finds this near the floor is a door, m.
 const DOOR_SILL_M: f64 = 0.1;
-/// The simulated world's state (the plaster, where the robot stands),
-/// written with every checkpoint: a resumed run goes on in it.
-pub const WORLD_FILE: &str = "world.json";
 /// Every room's plan a run has plastered on (beside the checkpoint): a
 /// resumed run scores the whole job, rooms done before the stop too.
 const PLASTERED_FILE: &str = "plastered.json";
@@ -377,73 +375,6 @@ pub fn run_task_mission(
     Ok(summary)
 }
 
-/// The room a robot at `at` (world frame) stands in, as the simulator
-/// knows it: its name, its south-west corner (the origin of the room frame
-/// the robot's filter keeps) and its size.
-#[derive(Clone, Debug)]
-pub(crate) struct RoomFrame {
-    pub name: String,
-    pub origin: [f64; 2],
-    pub size_m: [f64; 2],
-}
-
-impl RoomFrame {
-    /// The room of `layout` named `name`.
-    pub(crate) fn named(layout: &Layout, name: &str) -> Result<RoomFrame> {
-        let room = layout
-            .rooms
-            .iter()
-            .find(|r| r.name == name)
-            .ok_or_else(|| BadInput(format!("the plan's room {name:?} is not in the world")))?;
-        let (lo, hi) = bounds(&room.corners);
-        Ok(RoomFrame {
-            name: room.name.clone(),
-            origin: lo,
-            size_m: [hi[0] - lo[0], hi[1] - lo[1]],
-        })
-    }
-
-    /// The room of `layout` holding `at`.
-    pub(crate) fn of(layout: &Layout, at: &Pose2) -> Result<RoomFrame> {
-        let room = layout
-            .rooms
-            .iter()
-            .find(|r| {
-                let (lo, hi) = bounds(&r.corners);
-                (lo[0]..=hi[0]).contains(&at.x) && (lo[1]..=hi[1]).contains(&at.y)
-            })
-            .ok_or_else(|| BadInput(format!("the robot's start {at:?} is in no room")))?;
-        let (lo, hi) = bounds(&room.corners);
-        Ok(RoomFrame {
-            name: room.name.clone(),
-            origin: lo,
-            size_m: [hi[0] - lo[0], hi[1] - lo[1]],
-        })
-    }
-
-    /// `p` (world frame) in the room frame.
-    pub(crate) fn to_room(&self, p: &Pose2) -> Pose2 {
-        Pose2::new(p.x - self.origin[0], p.y - self.origin[1], p.theta)
-    }
-
-    /// `p` (room frame) in the world frame.
-    pub(crate) fn to_world(&self, p: &Pose2) -> Pose2 {
-        Pose2::new(p.x + self.origin[0], p.y + self.origin[1], p.theta)
-    }
-}
-
-fn bounds(points: &[Point2<f64>]) -> ([f64; 2], [f64; 2]) {
-    points.iter().fold(
-        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
-        |(lo, hi), p| {
-            (
-                [lo[0].min(p.x), lo[1].min(p.y)],
-                [hi[0].max(p.x), hi[1].max(p.y)],
-            )
-        },
-    )
-}
-
 /// What every run of a job shares.
 pub(crate) struct Setup<'a> {
     pub(crate) mission: &'a Mission,
@@ -537,11 +468,7 @@ impl<P: Simulated> Sink<P> for SimRun<'_> {
         _moved: &std::result::Result<(), String>,
     ) -> std::result::Result<(), SinkError> {
         let perception = robot.perception();
-        if let Some(name) = perception.room_name()
-            && name != self.frame.name
-        {
-            self.frame = RoomFrame::named(&self.layout, name)?;
-        }
+        self.frame.follow(&self.layout, perception.room_name())?;
         self.room_changes.push(RoomChange {
             stamp_s: robot.now().as_secs_f64(),
             door,
@@ -649,11 +576,39 @@ pub(crate) struct SimJob<'a, P: Simulated> {
     layout: Arc<Layout>,
     pub(crate) robot: Robot<P>,
     first_task: usize,
+    sinks: JobSinks<'a>,
+}
+
+/// Where a job's loop writes: events, checkpoints, the world kept beside
+/// them, the recording, the scoring.
+struct JobSinks<'a> {
     events: EventLog<Box<dyn Write + Send>>,
     checkpoints: Option<Checkpointer>,
     keeper: Option<WorldKeeper>,
     recording: Option<Recording>,
     run: SimRun<'a>,
+}
+
+impl<'a> JobSinks<'a> {
+    /// Every sink, then `extra`.
+    fn all<'s, P: Simulated>(
+        &'s mut self,
+        extra: Option<&'s mut (dyn Sink<P> + 's)>,
+    ) -> Vec<&'s mut (dyn Sink<P> + 's)> {
+        let mut sinks: Vec<&mut dyn Sink<P>> = vec![&mut self.events];
+        if let Some(c) = self.checkpoints.as_mut() {
+            sinks.push(c);
+        }
+        if let Some(k) = self.keeper.as_mut() {
+            sinks.push(k);
+        }
+        if let Some(r) = self.recording.as_mut() {
+            sinks.push(r);
+        }
+        sinks.push(&mut self.run);
+        sinks.extend(extra);
+        sinks
+    }
 }
 
 impl<'a, P: Simulated> SimJob<'a, P> {
@@ -819,36 +774,14 @@ impl<'a, P: Simulated> SimJob<'a, P> {
             layout,
             robot,
             first_task,
-            events,
-            checkpoints,
-            keeper,
-            recording,
-            run,
+            sinks: JobSinks {
+                events,
+                checkpoints,
+                keeper,
+                recording,
+                run,
+            },
         })
-    }
-
-    /// The job's sinks, then `extra`.
-    fn sinks<'s>(
-        events: &'s mut EventLog<Box<dyn Write + Send>>,
-        checkpoints: &'s mut Option<Checkpointer>,
-        keeper: &'s mut Option<WorldKeeper>,
-        recording: &'s mut Option<Recording>,
-        run: &'s mut SimRun<'a>,
-        extra: Option<&'s mut (dyn Sink<P> + 's)>,
-    ) -> Vec<&'s mut (dyn Sink<P> + 's)> {
-        let mut sinks: Vec<&mut dyn Sink<P>> = vec![events];
-        if let Some(c) = checkpoints.as_mut() {
-            sinks.push(c);
-        }
-        if let Some(k) = keeper.as_mut() {
-            sinks.push(k);
-        }
-        if let Some(r) = recording.as_mut() {
-            sinks.push(r);
-        }
-        sinks.push(run);
-        sinks.extend(extra);
-        sinks
     }
 
     /// [`Robot::tick`](stucco_runtime::Robot::tick) with the job's sinks
@@ -858,33 +791,17 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         telecommands: &[stucco_core::Telecommand],
         extra: Option<&'s mut (dyn Sink<P> + 's)>,
     ) -> Result<Outputs> {
-        let SimJob {
-            robot,
-            events,
-            checkpoints,
-            keeper,
-            recording,
-            run,
-            ..
-        } = self;
-        let mut sinks = Self::sinks(events, checkpoints, keeper, recording, run, extra);
-        robot.tick(telecommands, false, &mut sinks).map_err(sunk)
+        let mut sinks = self.sinks.all(extra);
+        self.robot
+            .tick(telecommands, false, &mut sinks)
+            .map_err(sunk)
     }
 
     /// [`Robot::act`](stucco_runtime::Robot::act) with the job's sinks and
     /// `extra`.
     pub(crate) fn act<'s>(&'s mut self, extra: Option<&'s mut (dyn Sink<P> + 's)>) -> Result<()> {
-        let SimJob {
-            robot,
-            events,
-            checkpoints,
-            keeper,
-            recording,
-            run,
-            ..
-        } = self;
-        let mut sinks = Self::sinks(events, checkpoints, keeper, recording, run, extra);
-        robot.act(&mut sinks).map_err(sunk)
+        let mut sinks = self.sinks.all(extra);
+        self.robot.act(&mut sinks).map_err(sunk)
     }
 
     /// Ends the job as `ending` says: the last checkpoint and the world
@@ -899,11 +816,14 @@ impl<'a, P: Simulated> SimJob<'a, P> {
             layout,
             robot,
             first_task,
-            events,
-            mut checkpoints,
-            recording,
-            run,
-            ..
+            sinks:
+                JobSinks {
+                    events,
+                    mut checkpoints,
+                    recording,
+                    run,
+                    ..
+                },
         } = self;
         let Setup {
             mission, resume, ..

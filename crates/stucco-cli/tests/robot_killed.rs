@@ -6,6 +6,7 @@
 //! station is seen, not at a control period's end.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -79,4 +80,46 @@ fn a_robot_killed_while_plastering_finishes_the_job_when_resumed() {
     assert!(f("double_sprayed_pct") <= 1.0, "{report}");
     assert!(f("wall_coverage_pct") >= 99.5, "{report}");
     assert!(f("ceiling_coverage_pct") >= 99.0, "{report}");
+}
+
+/// Asked to stop (SIGINT, as Ctrl-C sends; SIGTERM, as a service manager
+/// does), the robot ends at a period's end and leaves its report and last
+/// checkpoint.
+#[test]
+fn a_robot_asked_to_stop_leaves_its_report() {
+    for signal in ["-INT", "-TERM"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_stucco"))
+            .arg("robot")
+            .arg(mission())
+            .args(["--name", "asked", "--out"])
+            .arg(out)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Running: its loop has said so on its log.
+        let mut log = BufReader::new(child.stderr.take().unwrap()).lines();
+        assert!(
+            log.by_ref()
+                .map_while(Result::ok)
+                .any(|l| l.contains("on zenoh")),
+            "never started"
+        );
+        let rest = std::thread::spawn(move || log.count());
+        let status = Command::new("kill")
+            .arg(signal)
+            .arg(child.id().to_string())
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let status = child.wait().unwrap();
+        rest.join().unwrap();
+        assert!(status.success(), "{signal}: {status}");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(report["outcome"], "stopped", "{signal}: {report}");
+    }
 }
