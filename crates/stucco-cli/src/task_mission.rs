@@ -176,6 +176,9 @@ pub struct MissionReport {
     pub outcome: String,
     /// Why it failed.
     pub reason: Option<String>,
+    /// Why it failed, typed (a task's failure: its `code` and details).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<stucco_mission::TaskFailure>,
     /// The mission's name.
     pub mission: String,
     /// The seed.
@@ -934,6 +937,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         }
         let exec = robot.executive();
         let est = robot.perception().mission_estimate();
+        let over = matches!(ending, Ending::Over);
         let (outcome, reason) = match (exec.mode(), ending) {
             (_, Ending::Stopped) => (
                 "stopped",
@@ -1053,6 +1057,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         let report = MissionReport {
             outcome: outcome.to_owned(),
             reason,
+            failure: exec.failure().cloned().filter(|_| over),
             mission: mission.name.clone(),
             seed,
             sim_seconds: sim,

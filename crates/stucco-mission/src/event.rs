@@ -3,6 +3,7 @@
 use crate::executive::OperatorCommand;
 use crate::supervisor::Hazard;
 use crate::task::WallName;
+use crate::tasks::TaskFailure;
 use serde::Serialize;
 use stucco_core::Stamp;
 
@@ -55,8 +56,10 @@ pub enum EventKind {
     TaskFailed {
         /// Its index.
         task: usize,
-        /// Why.
+        /// Why, in a sentence.
         reason: String,
+        /// Why, for programs.
+        failure: TaskFailure,
     },
     /// The operator was asked something.
     OperatorPrompt {

@@ -9,7 +9,7 @@ use crate::model::Estimate;
 use crate::plaster::{Cursor, PlasterCoverage, PlasterProgress};
 use crate::supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor};
 use crate::task::TaskSpec;
-use crate::tasks::{Effects, Task, TaskCx, TaskStep, Thaw, route};
+use crate::tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw, route};
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -217,6 +217,8 @@ pub struct Executive {
     replies: BTreeMap<String, Reply>,
     /// Operator tasks by index, and the telecommand each answers.
     waiting: BTreeMap<usize, String>,
+    /// Why the mission failed, when it did.
+    failure: Option<TaskFailure>,
     /// Direct driving until a deadline, for a telecommand.
     jog: Option<(DriveCommand, Stamp, String)>,
     /// Whether the operator's link is up (none: no operator yet).
@@ -253,6 +255,7 @@ impl Executive {
             replies: BTreeMap::new(),
             waiting: BTreeMap::new(),
             jog: None,
+            failure: None,
             link_up: None,
             acks: Vec::new(),
             effects: Effects {
@@ -285,9 +288,7 @@ impl Executive {
             self.reply(
                 now,
                 &id,
-                Reply::Failed {
-                    reason: "the operator's link was lost".to_owned(),
-                },
+                Reply::failed("link_lost", "the operator's link was lost"),
             );
         }
         if self.config.safety.on_link_loss == LinkLossPolicy::Pause
@@ -377,6 +378,11 @@ impl Executive {
         }
     }
 
+    /// Why the mission failed (the sentence is in its mode's reason).
+    pub fn failure(&self) -> Option<&TaskFailure> {
+        self.failure.as_ref()
+    }
+
     /// The mission's state.
     pub fn mode(&self) -> &MissionMode {
         &self.mode
@@ -446,7 +452,7 @@ impl Executive {
         if inputs.estop && !self.mode.is_final() && self.mode != MissionMode::EStopped {
             self.emit(now, EventKind::EStop);
             if self.config.unattended {
-                self.fail(now, "e-stop pressed".to_owned());
+                self.fail(now, TaskFailure::EStop);
                 checkpoint_due = true;
             } else {
                 self.mode = MissionMode::EStopped;
@@ -454,7 +460,7 @@ impl Executive {
         }
         if inputs.bumper && self.mode == MissionMode::Running {
             if self.config.unattended {
-                self.fail(now, "bumper: the robot touched something".to_owned());
+                self.fail(now, TaskFailure::Bumper);
                 checkpoint_due = true;
             } else {
                 self.pause(now, "bumper: the robot touched something".to_owned());
@@ -566,9 +572,7 @@ impl Executive {
                     self.answer(
                         now,
                         a.index,
-                        Reply::Failed {
-                            reason: "the mission was aborted".to_owned(),
-                        },
+                        Reply::failed("aborted", "the mission was aborted"),
                     );
                 }
                 self.mode = MissionMode::Aborted;
@@ -581,13 +585,7 @@ impl Executive {
                 };
                 self.status[a.index] = TaskStatus::Skipped;
                 self.emit(now, EventKind::TaskSkipped { task: a.index });
-                self.answer(
-                    now,
-                    a.index,
-                    Reply::Failed {
-                        reason: "skipped".to_owned(),
-                    },
-                );
+                self.answer(now, a.index, Reply::failed("skipped", "skipped"));
                 Ok(true)
             }
             OperatorCommand::Continue => {
@@ -728,9 +726,11 @@ impl Executive {
             };
         }
         if let TaskSpec::GoToRoom { room, .. } = &spec
-            && let Err(reason) = route(&self.config, room, est)
+            && let Err(why) = route(&self.config, room, est)
         {
-            return Reply::Rejected { reason };
+            return Reply::Rejected {
+                reason: why.to_string(),
+            };
         }
         // Next after the task under way; a task waiting for the operator
         // has its answer.
@@ -770,26 +770,24 @@ impl Executive {
         self.emit(now, EventKind::Paused { reason });
     }
 
-    fn fail(&mut self, now: Stamp, reason: String) {
+    /// The task under way (if any) and the mission fail for `failure`.
+    fn fail(&mut self, now: Stamp, failure: TaskFailure) {
+        let reason = failure.to_string();
         if let Some(a) = self.active.take() {
             self.status[a.index] = TaskStatus::Failed {
                 reason: reason.clone(),
             };
-            self.answer(
-                now,
-                a.index,
-                Reply::Failed {
-                    reason: reason.clone(),
-                },
-            );
+            self.answer(now, a.index, Reply::failed(failure.code(), &reason));
             self.emit(
                 now,
                 EventKind::TaskFailed {
                     task: a.index,
                     reason: reason.clone(),
+                    failure: failure.clone(),
                 },
             );
         }
+        self.failure = Some(failure);
         self.mode = MissionMode::Failed {
             reason: reason.clone(),
         };
@@ -827,7 +825,7 @@ impl Executive {
                 if safety.on_lost == LostPolicy::Fail
                     || now.seconds_since(since) > safety.lost_timeout_s
                 {
-                    self.fail(now, "the pose estimate is lost".to_owned());
+                    self.fail(now, TaskFailure::EstimateLost);
                     *checkpoint_due = true;
                 }
             }
@@ -854,7 +852,7 @@ impl Executive {
                     }
                     *checkpoint_due |= std::mem::take(&mut self.effects.checkpoint);
                     if a.blocked_s > safety.blocked_timeout_s {
-                        self.fail(now, "the way stayed blocked".to_owned());
+                        self.fail(now, TaskFailure::WayBlocked);
                         *checkpoint_due = true;
                     }
                 }
@@ -936,7 +934,7 @@ impl Executive {
         now: Stamp,
         index: usize,
         est: &Estimate,
-    ) -> Result<ActiveTask, (Box<dyn Task>, String)> {
+    ) -> Result<ActiveTask, (Box<dyn Task>, TaskFailure)> {
         let mut task = self.tasks[index].build();
         let mut cx = TaskCx {
             now,

@@ -51,4 +51,4 @@ pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wa
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};
 pub use task::{Landmark, OnTimeout, Region, Side, TaskSpec, WallName};
-pub use tasks::{Effects, Task, TaskCx, TaskStep, Thaw};
+pub use tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw};

@@ -3,7 +3,7 @@
 //! into each room beyond.
 
 use super::ways::planned_way;
-use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskStep, Thaw};
+use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::{EventKind, ExecutiveConfig};
 use crate::model::{DoorEstimate, Estimate, WallGeometry};
@@ -86,12 +86,10 @@ impl DoorTask {
                 .map_or_else(|| format!("room {r}"), |r| r.name.clone())
         };
         if cx.est.room != Some(room) {
-            return Some(TaskStep::Failed(format!(
-                "{}: the robot went through the door into {} but its estimate did not follow \
-                 (it is not beyond the door)",
-                task,
-                name(room)
-            )));
+            return Some(TaskStep::Failed(TaskFailure::EstimateNotBeyondDoor {
+                task: task.to_owned(),
+                room: name(room),
+            }));
         }
         w.entering = None;
         if let Some(door) = w.passed {
@@ -122,17 +120,18 @@ impl DoorTask {
 }
 
 impl Task for DoorTask {
-    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (config, est) = (cx.config, cx.est);
         let [approach_m, beyond_m, speed_mps] = self.approach_beyond_speed;
         match &self.goal {
             Goal::Door(door) => {
                 let door = *door;
                 let Some(d) = est.doors.get(door) else {
-                    return Err(format!(
-                        "pass_door: door {door} is not known ({} doors found)",
-                        est.doors.len()
-                    ));
+                    return Err(TaskFailure::UnknownDoor {
+                        task: "pass_door".to_owned(),
+                        door,
+                        found: est.doors.len(),
+                    });
                 };
                 let next_depth = d.plan_door.and_then(|p| next_room_depth(config, est, p));
                 self.ways.queue.extend(door_pass(
@@ -190,10 +189,10 @@ impl Task for DoorTask {
                 .room
                 .and_then(|r| cx.config.floor.as_ref().and_then(|f| f.beyond(door, r)));
             let Some(beyond) = beyond else {
-                return TaskStep::Failed(format!(
-                    "{}: door {door} of the plan is not a door of the robot's room",
-                    self.name()
-                ));
+                return TaskStep::Failed(TaskFailure::DoorNotOfThisRoom {
+                    task: self.name().to_owned(),
+                    door,
+                });
             };
             w.entering = Some(beyond);
             w.passed = Some(door);
@@ -242,23 +241,25 @@ pub(crate) fn route(
     config: &ExecutiveConfig,
     room: &str,
     est: &Estimate,
-) -> Result<Vec<usize>, String> {
+) -> Result<Vec<usize>, TaskFailure> {
     let Some(floor) = &config.floor else {
-        return Err("go_to_room: the mission has no floor plan ([[room]], [[door]])".into());
+        return Err(TaskFailure::NoFloorPlan);
     };
     let Some(to) = floor.room(room) else {
-        let names: Vec<&str> = floor.rooms().iter().map(|r| r.name.as_str()).collect();
-        return Err(format!(
-            "go_to_room: no room {room:?} on the plan (it has {})",
-            names.join(", ")
-        ));
+        return Err(TaskFailure::UnknownRoom {
+            room: room.to_owned(),
+            rooms: floor.rooms().iter().map(|r| r.name.clone()).collect(),
+        });
     };
     let Some(here) = est.room else {
-        return Err("go_to_room: the robot does not know which room it is in".into());
+        return Err(TaskFailure::RoomNotKnown);
     };
     floor.route(here, to).ok_or_else(|| {
         let from = floor.rooms().get(here).map_or("here", |r| r.name.as_str());
-        format!("go_to_room: no way on the plan from {from} to {room}")
+        TaskFailure::NoRoute {
+            from: from.to_owned(),
+            to: room.to_owned(),
+        }
     })
 }
 
@@ -410,12 +411,12 @@ fn plan_door_pass(
     door: usize,
     approach_beyond_m: [f64; 2],
     speed_mps: f64,
-) -> Result<Vec<Behaviour>, String> {
+) -> Result<Vec<Behaviour>, TaskFailure> {
     let d = est
         .doors
         .iter()
         .find(|d| d.plan_door == Some(door))
-        .ok_or_else(|| format!("go_to_room: door {door} of the plan is not known in this room"))?;
+        .ok_or(TaskFailure::PlanDoorNotSeen { door })?;
     Ok(door_pass(
         config,
         est,

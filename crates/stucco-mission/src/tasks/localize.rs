@@ -1,6 +1,6 @@
 //! `localize`: stands still until the pose is known well enough.
 
-use super::{Behaviours, Task, TaskCx, TaskStep, Thaw, drive_through};
+use super::{Behaviours, Task, TaskCx, TaskFailure, TaskStep, Thaw, drive_through};
 use crate::behaviour::{Behaviour, BehaviourKind};
 
 /// Stands still until the position is known to `max_sigma_m`.
@@ -22,7 +22,7 @@ impl Localize {
 }
 
 impl Task for Localize {
-    fn start(&mut self, _: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, _: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         self.ways.queue.push_back(Behaviour::hold());
         Ok(())
     }
@@ -33,10 +33,10 @@ impl Task for Localize {
         }
         let timeout_s = self.timeout_s;
         if cx.elapsed_s() > timeout_s {
-            return TaskStep::Failed(format!(
-                "localize: the position is known to {:.1} mm after {timeout_s} s",
-                1e3 * cx.est.position_sigma_m
-            ));
+            return TaskStep::Failed(TaskFailure::NotLocalized {
+                sigma_m: cx.est.position_sigma_m,
+                timeout_s,
+            });
         }
         drive_through(&mut self.ways, cx)
     }

@@ -8,6 +8,7 @@
 //! task is made from its kind.
 
 mod door;
+mod failure;
 mod localize;
 mod motion;
 mod plaster;
@@ -27,6 +28,7 @@ use stucco_core::{DriveCommand, Stamp, ToolCommand};
 use stucco_plan::Plan;
 
 pub(crate) use door::route;
+pub use failure::TaskFailure;
 
 /// Run-in along the wall before a pass starts, m: the line law's distance
 /// to settle on the standoff from where the robot could turn (the offset
@@ -99,7 +101,7 @@ pub enum TaskStep {
     /// Finished.
     Done,
     /// Failed, and why.
-    Failed(String),
+    Failed(TaskFailure),
 }
 
 /// A checkpoint's progress for a task to take up as it starts (the
@@ -116,7 +118,7 @@ pub struct Thaw {
 pub trait Task: std::fmt::Debug + Send {
     /// Plans the task from the estimate. A task that takes up a
     /// checkpoint's progress takes it out of `thaw`.
-    fn start(&mut self, cx: &mut TaskCx<'_>, thaw: &mut Option<Thaw>) -> Result<(), String>;
+    fn start(&mut self, cx: &mut TaskCx<'_>, thaw: &mut Option<Thaw>) -> Result<(), TaskFailure>;
 
     /// One tick of the task.
     fn step(&mut self, cx: &mut TaskCx<'_>) -> TaskStep;

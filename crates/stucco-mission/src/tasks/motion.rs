@@ -2,7 +2,7 @@
 //! in the frame of a wall or a door.
 
 use super::ways::way;
-use super::{Behaviours, Task, TaskCx, TaskStep, Thaw, drive_through};
+use super::{Behaviours, Task, TaskCx, TaskFailure, TaskStep, Thaw, drive_through};
 use crate::behaviour::BehaviourKind;
 use crate::model::{Estimate, WallGeometry};
 use crate::task::Landmark;
@@ -30,7 +30,7 @@ impl MoveRelative {
 }
 
 impl Task for MoveRelative {
-    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (est, pose) = (cx.est, cx.est.pose);
         let frame = match &self.landmark {
             None => pose,
@@ -59,15 +59,14 @@ impl Task for MoveRelative {
 
 /// The frame of `landmark` in the room as `est` knows it: facing it from
 /// inside, its origin at its middle on the wall's line, x out of the room.
-fn landmark_frame(landmark: &Landmark, est: &Estimate) -> Result<Pose2, String> {
+fn landmark_frame(landmark: &Landmark, est: &Estimate) -> Result<Pose2, TaskFailure> {
     let (wall, along) = match *landmark {
         Landmark::Wall(w) => (w, WallGeometry::of(w, est.room_m).length_m / 2.0),
         Landmark::Door(i) => {
-            let d = est.doors.get(i).ok_or_else(|| {
-                format!(
-                    "move_relative: door {i} is not known ({} doors found)",
-                    est.doors.len()
-                )
+            let d = est.doors.get(i).ok_or_else(|| TaskFailure::UnknownDoor {
+                task: "move_relative".to_owned(),
+                door: i,
+                found: est.doors.len(),
             })?;
             (d.wall, d.position_m)
         }

@@ -5,7 +5,10 @@
 use super::survey::{Legs, SURVEY_BLOCKED_S, survey_legs, survey_way};
 use super::wall::MIN_RUN_IN_M;
 use super::ways::{estimate_space, planned_way};
-use super::{Behaviours, REPLAN_AFTER_S, RUN_IN_M, Task, TaskCx, TaskStep, Thaw, pivot_clearance};
+use super::{
+    Behaviours, REPLAN_AFTER_S, RUN_IN_M, Task, TaskCx, TaskFailure, TaskStep, Thaw,
+    pivot_clearance,
+};
 use crate::behaviour::{Behaviour, BehaviourKind};
 use crate::executive::{EventKind, ExecutiveConfig, PARK_NOZZLE_M};
 use crate::manoeuvre::{self, Space};
@@ -82,7 +85,7 @@ impl Plaster {
 }
 
 impl Task for Plaster {
-    fn start(&mut self, cx: &mut TaskCx<'_>, thaw: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, cx: &mut TaskCx<'_>, thaw: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (config, est, index) = (cx.config, cx.est, cx.index);
         let clearance = pivot_clearance(config);
         let s = &self.spec;
@@ -133,7 +136,7 @@ impl Task for Plaster {
             est.position_sigma_m <= config.safety.spray_max_sigma_m && cx.hazard.is_none();
         let index = cx.index;
         let Some(run) = self.run.as_mut() else {
-            return TaskStep::Failed("plaster: no plan".to_owned());
+            return TaskStep::Failed(TaskFailure::NoPlan);
         };
         if run.finished() && !matches!(run.phase, Phase::Leaving) {
             return TaskStep::Done;
@@ -189,7 +192,7 @@ impl Task for Plaster {
                     Err(e) => return TaskStep::Failed(e),
                 };
                 let Some(run) = self.run.as_mut() else {
-                    return TaskStep::Failed("plaster: no plan".to_owned());
+                    return TaskStep::Failed(TaskFailure::NoPlan);
                 };
                 cx.emit(EventKind::PlanMade {
                     task: index,
@@ -335,10 +338,9 @@ impl Task for Plaster {
             }
             Phase::Positioning { left_s } => {
                 let Some(first) = run.first_point(est) else {
-                    return TaskStep::Failed(format!(
-                        "plaster: the robot does not face the surface of station {}",
-                        run.cursor.station
-                    ));
+                    return TaskStep::Failed(TaskFailure::NotFacingSurface {
+                        station: run.cursor.station,
+                    });
                 };
                 let left_s = if left_s < 0.0 {
                     // Newly here: the axes travel at their speed.
@@ -568,24 +570,21 @@ fn plaster_run(
     index: usize,
     (walls, ceiling, region): (&[WallName], bool, Option<&Region>),
     est: &Estimate,
-) -> Result<PlasterRun, String> {
+) -> Result<PlasterRun, TaskFailure> {
     if let Some(Thaw { progress: p, plan }) = thaw.take()
         && p.task == index
     {
         let Some(plan) = plan else {
-            return Err(format!(
-                "plaster: the checkpoint stopped at station {} but the plan it was \
-                 carrying out is missing",
-                p.cursor.station
-            ));
+            return Err(TaskFailure::CheckpointPlanMissing {
+                station: p.cursor.station,
+            });
         };
         let digest = plan_digest(&plan);
         if digest != p.plan_digest {
-            return Err(format!(
-                "plaster: the plan beside the checkpoint ({digest}) is not the one it was \
-                 carrying out ({})",
-                p.plan_digest
-            ));
+            return Err(TaskFailure::CheckpointPlanDiffers {
+                found: digest,
+                expected: p.plan_digest,
+            });
         }
         let mut run = PlasterRun::new(plan, p.cursor);
         run.resume_s = p.in_move_s.max(0.0);
@@ -693,9 +692,9 @@ fn plan_room(
     config: &ExecutiveConfig,
     (walls, ceiling, region): (&[WallName], bool, Option<&Region>),
     est: &Estimate,
-) -> Result<Plan, String> {
+) -> Result<Plan, TaskFailure> {
     let (Some(tool), vehicle) = (config.spray.as_ref(), &config.vehicle) else {
-        return Err("plaster: the mission has no [spray] tool".to_owned());
+        return Err(TaskFailure::NoSprayTool);
     };
     let mut openings: Vec<WallOpening> = est
         .windows
@@ -799,7 +798,9 @@ fn plan_room(
         obstacles: est.obstacles.clone(),
     };
     let mut plan =
-        stucco_plan::plan(&room, tool, vehicle, &est.pose).map_err(|e| format!("plaster: {e}"))?;
+        stucco_plan::plan(&room, tool, vehicle, &est.pose).map_err(|e| TaskFailure::Planning {
+            error: e.to_string(),
+        })?;
     let wanted = |s: SurfaceId| match s {
         SurfaceId::Wall(w) => walls.contains(&w),
         SurfaceId::Ceiling => ceiling,

@@ -2,7 +2,7 @@
 //! and the loops a plastering survey drives round a room.
 
 use super::ways::{planned_way, way};
-use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskStep, Thaw};
+use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::ExecutiveConfig;
 use crate::model::Estimate;
@@ -54,7 +54,7 @@ impl MapRoom {
 }
 
 impl Task for MapRoom {
-    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
         let speed_mps = self.speed_mps;
         let corners = survey_loop(self.path.as_deref(), self.inset_m, est.room_m)?;
@@ -100,12 +100,15 @@ impl Task for MapRoom {
             .collect();
         if elapsed > timeout_s {
             return TaskStep::Failed(if unseen.is_empty() {
-                format!(
-                    "map_room: the room's size is known to {:.1} mm after {timeout_s} s",
-                    1e3 * loose.iter().fold(0.0f64, |m, &s| m.max(s))
-                )
+                TaskFailure::RoomSizeLoose {
+                    sigma_m: loose.iter().fold(0.0f64, |m, &s| m.max(s)),
+                    timeout_s,
+                }
             } else {
-                format!("map_room: walls {unseen:?} not seen in {timeout_s} s")
+                TaskFailure::WallsNotSeen {
+                    walls: unseen,
+                    timeout_s,
+                }
             });
         }
         if let (true, Some(legs)) = (self.ways.idle(), self.legs.as_mut()) {
@@ -121,9 +124,7 @@ impl Task for MapRoom {
                 return TaskStep::Done;
             }
             if legs.stuck() {
-                return TaskStep::Failed(
-                    "map_room: no clear way reaches any corner of the loop".to_owned(),
-                );
+                return TaskStep::Failed(TaskFailure::NoWayToCorners);
             }
             let way = legs.next(config, est).unwrap_or_default();
             if way.is_empty() {
@@ -455,15 +456,13 @@ fn survey_loop(
     path: Option<&[[f64; 2]]>,
     inset_m: f64,
     room_m: [f64; 2],
-) -> Result<Vec<[f64; 2]>, String> {
+) -> Result<Vec<[f64; 2]>, TaskFailure> {
     if let Some(p) = path {
         return Ok(p.to_vec());
     }
     let [xs, ys] = room_m;
     if 2.0 * inset_m >= xs.min(ys) {
-        return Err(format!(
-            "map_room: an inset of {inset_m} m leaves no loop in a {xs:.2} × {ys:.2} m room"
-        ));
+        return Err(TaskFailure::NoLoop { inset_m, room_m });
     }
     Ok(vec![
         [inset_m, inset_m],

@@ -1,6 +1,6 @@
 //! `wait_for_operator`: stops and waits for the operator's `continue`.
 
-use super::{Behaviours, Task, TaskCx, TaskStep, Thaw, drive_through};
+use super::{Behaviours, Task, TaskCx, TaskFailure, TaskStep, Thaw, drive_through};
 use crate::behaviour::{Behaviour, BehaviourKind};
 use crate::executive::EventKind;
 use crate::task::OnTimeout;
@@ -26,7 +26,7 @@ impl WaitForOperator {
 }
 
 impl Task for WaitForOperator {
-    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         self.ways.queue.push_back(Behaviour::hold());
         cx.emit(EventKind::OperatorPrompt {
             task: cx.index,
@@ -43,9 +43,7 @@ impl Task for WaitForOperator {
         if self.timeout_s.is_some_and(|t| elapsed > t) {
             return match self.on_timeout {
                 OnTimeout::Continue => TaskStep::Done,
-                OnTimeout::Fail => {
-                    TaskStep::Failed("wait_for_operator: nobody answered".to_owned())
-                }
+                OnTimeout::Fail => TaskStep::Failed(TaskFailure::NobodyAnswered),
             };
         }
         drive_through(&mut self.ways, cx)

@@ -1,7 +1,9 @@
 //! `align_to_wall` and `follow_wall`: onto a wall's standoff, and along it.
 
 use super::ways::way;
-use super::{Behaviours, RUN_IN_M, Task, TaskCx, TaskStep, Thaw, drive_through, pivot_clearance};
+use super::{
+    Behaviours, RUN_IN_M, Task, TaskCx, TaskFailure, TaskStep, Thaw, drive_through, pivot_clearance,
+};
 use crate::behaviour::{Behaviour, BehaviourKind};
 use crate::executive::ExecutiveConfig;
 use crate::model::{Estimate, WallGeometry, pose_at_wall};
@@ -37,7 +39,7 @@ impl AlignToWall {
 }
 
 impl Task for AlignToWall {
-    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
         let gains = &config.gains;
         let clearance = pivot_clearance(config);
@@ -110,7 +112,7 @@ impl FollowWall {
 }
 
 impl Task for FollowWall {
-    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), String> {
+    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
         let gains = &config.gains;
         let clearance = pivot_clearance(config);
@@ -127,9 +129,10 @@ impl Task for FollowWall {
         let front = config.vehicle.front_m();
         let room_left = if forward { g.length_m - to_m } else { to_m };
         if room_left < front + 0.1 {
-            return Err(format!(
-                "follow_wall: the pass ends {room_left:.2} m from the wall's end; the body reaches {front:.2} m ahead"
-            ));
+            return Err(TaskFailure::PassEndsAtCorner {
+                room_left_m: room_left,
+                front_m: front,
+            });
         }
         let side = g.side_for(forward);
         let start = pose_at_wall(wall, est.room_m, from_m, standoff_m, side);
@@ -186,7 +189,7 @@ pub(crate) fn approach(
     est: &Estimate,
     clearance: f64,
     speed_mps: f64,
-) -> Result<(Vec<Behaviour>, Pose2), String> {
+) -> Result<(Vec<Behaviour>, Pose2), TaskFailure> {
     let g = WallGeometry::of(wall, est.room_m);
     let gp = goal.position().coords;
     let dir = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
@@ -201,15 +204,16 @@ pub(crate) fn approach(
         at + RUN_IN_M
     };
     if lo > hi {
-        return Err("the room is too small to turn in".to_owned());
+        return Err(TaskFailure::RoomTooSmallToTurn);
     }
     let p_at = want.clamp(lo, hi);
     let run_in = (at - p_at).abs();
     if run_in < MIN_RUN_IN_M || (forward && p_at > at) || (!forward && p_at < at) {
-        return Err(format!(
-            "the pass starts {at:.2} m along the wall: too near the corner to turn onto it \
-             (a turn needs {clearance:.2} m from the walls and {MIN_RUN_IN_M:.1} m of run-in)"
-        ));
+        return Err(TaskFailure::PassStartsAtCorner {
+            at_m: at,
+            clearance_m: clearance,
+            run_in_m: MIN_RUN_IN_M,
+        });
     }
     let p = g.point(p_at, standoff.max(clearance));
     let turn_at = Pose2::new(p.x, p.y, goal.theta);
