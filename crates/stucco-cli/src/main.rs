@@ -590,7 +590,7 @@ fn describe(r: &Reply) -> String {
         Reply::Accepted => "accepted".to_owned(),
         Reply::Done => "done".to_owned(),
         Reply::Rejected { reason } => format!("rejected: {reason}"),
-        Reply::Failed { reason } => format!("failed: {reason}"),
+        Reply::Failed { reason, .. } => format!("failed: {reason}"),
     }
 }
 

@@ -174,6 +174,9 @@ pub struct MissionReport {
     pub outcome: String,
     /// Why it failed.
     pub reason: Option<String>,
+    /// Why it failed, typed (a task's failure: its `code` and details).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<stucco_mission::TaskFailure>,
     /// The mission's name.
     pub mission: String,
     /// The seed.
@@ -854,6 +857,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         }
         let exec = robot.executive();
         let est = robot.perception().mission_estimate();
+        let over = matches!(ending, Ending::Over);
         let (outcome, reason) = match (exec.mode(), ending) {
             (_, Ending::Stopped) => (
                 "stopped",
@@ -973,6 +977,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         let report = MissionReport {
             outcome: outcome.to_owned(),
             reason,
+            failure: exec.failure().cloned().filter(|_| over),
             mission: mission.name.clone(),
             seed,
             sim_seconds: sim,

@@ -217,9 +217,23 @@ pub enum Reply {
     Done,
     /// Tried and failed, and why.
     Failed {
-        /// Why.
+        /// Why, in a sentence.
         reason: String,
+        /// The kind of failure, for programs (a task's failure code, such
+        /// as `way_blocked`); absent from older robots.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        code: Option<String>,
     },
+}
+
+impl Reply {
+    /// Failed for `reason`, of the kind `code`.
+    pub fn failed(code: &str, reason: impl Into<String>) -> Reply {
+        Reply::Failed {
+            reason: reason.into(),
+            code: Some(code.to_owned()),
+        }
+    }
 }
 
 /// A reply to the telecommand `id`.

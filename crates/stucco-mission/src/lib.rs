@@ -30,6 +30,7 @@
 #![warn(missing_docs)]
 
 mod behaviour;
+mod event;
 mod executive;
 mod floor;
 mod manoeuvre;
@@ -38,6 +39,7 @@ mod plaster;
 mod route;
 mod supervisor;
 mod task;
+mod tasks;
 
 pub use behaviour::{Behaviour, BehaviourKind, PivotPhase, Step, go_to};
 pub use executive::{
@@ -49,3 +51,4 @@ pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wa
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};
 pub use task::{Landmark, OnTimeout, Region, Side, TaskSpec, WallName};
+pub use tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw};

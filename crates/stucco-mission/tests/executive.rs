@@ -326,6 +326,70 @@ fn a_pass_too_near_the_corner_is_refused_with_a_reason() {
     );
 }
 
+#[test]
+fn a_failure_is_typed_in_events_and_replies_with_its_sentence() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(
+        vec![TaskSpec::FollowWall {
+            wall: WallName::South,
+            standoff_m: 0.6,
+            from_m: 1.0,
+            to_m: 4.0,
+            speed_mps: 0.25,
+        }],
+        true,
+    );
+    let events = run(&mut exec, &mut robot, 1.0, |_, _| Vec::new());
+    let failure = exec.failure().cloned().expect("failed");
+    assert!(
+        matches!(failure, TaskFailure::PassStartsAtCorner { at_m, .. } if (at_m - 1.0).abs() < 1e-9),
+        "{failure:?}"
+    );
+    assert_eq!(failure.code(), "pass_starts_at_corner");
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?}", exec.mode());
+    };
+    assert_eq!(reason, &failure.to_string());
+    // The event log keeps the sentence where its readers find it, and the
+    // failure typed beside it.
+    let failed = events
+        .iter()
+        .find(|e| matches!(e.kind, EventKind::TaskFailed { .. }))
+        .expect("a task_failed event");
+    let json = serde_json::to_value(failed).expect("json");
+    assert_eq!(json["event"], "task_failed");
+    assert_eq!(json["reason"].as_str(), Some(reason.as_str()));
+    assert_eq!(json["failure"]["code"], "pass_starts_at_corner");
+    // A telecommand's task that fails is answered with the code and the
+    // sentence.
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = standing_by();
+    tick_with(&mut exec, &mut robot, &[]);
+    let pass = command(
+        "f1",
+        Stamp::ZERO,
+        Command::FollowWall {
+            wall: WallName::South,
+            standoff_m: 0.6,
+            from_m: 1.0,
+            to_m: 4.0,
+        },
+    );
+    let mut replies = tick_with(&mut exec, &mut robot, &[pass]).acks;
+    for _ in 0..10 {
+        replies.extend(tick_with(&mut exec, &mut robot, &[]).acks);
+    }
+    let failed = replies
+        .iter()
+        .find(|a| a.id == "f1" && matches!(a.reply, Reply::Failed { .. }))
+        .expect("the task failed");
+    let Reply::Failed { reason, code } = &failed.reply else {
+        unreachable!()
+    };
+    assert_eq!(code.as_deref(), Some("pass_starts_at_corner"));
+    assert!(reason.contains("too near the corner"), "{reason}");
+}
+
 fn waiting_tasks() -> Vec<TaskSpec> {
     vec![
         TaskSpec::WaitForOperator {

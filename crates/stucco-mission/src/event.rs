@@ -1,0 +1,184 @@
+//! What the executive tells of what happened: the event log's entries.
+
+use crate::executive::OperatorCommand;
+use crate::supervisor::Hazard;
+use crate::task::WallName;
+use crate::tasks::TaskFailure;
+use serde::Serialize;
+use stucco_core::Stamp;
+
+/// Something that happened, for the event log.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Event {
+    /// When.
+    pub stamp: Stamp,
+    /// What.
+    #[serde(flatten)]
+    pub kind: EventKind,
+}
+
+/// The kinds of events.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum EventKind {
+    /// The mission began (or resumed from a checkpoint at `first_task`).
+    MissionStarted {
+        /// Tasks in all.
+        tasks: usize,
+        /// The first task to carry out.
+        first_task: usize,
+    },
+    /// A task began.
+    TaskStarted {
+        /// Its index.
+        task: usize,
+        /// Its name.
+        name: String,
+    },
+    /// A behaviour began.
+    BehaviourStarted {
+        /// The task.
+        task: usize,
+        /// The behaviour's name.
+        behaviour: String,
+    },
+    /// A task finished.
+    TaskDone {
+        /// Its index.
+        task: usize,
+    },
+    /// A task was skipped.
+    TaskSkipped {
+        /// Its index.
+        task: usize,
+    },
+    /// A task failed.
+    TaskFailed {
+        /// Its index.
+        task: usize,
+        /// Why, in a sentence.
+        reason: String,
+        /// Why, for programs.
+        failure: TaskFailure,
+    },
+    /// The operator was asked something.
+    OperatorPrompt {
+        /// The task.
+        task: usize,
+        /// The question.
+        prompt: String,
+    },
+    /// The mission paused.
+    Paused {
+        /// Why.
+        reason: String,
+    },
+    /// The mission resumed.
+    Resumed,
+    /// The e-stop was pressed.
+    EStop,
+    /// The supervisor stopped the robot.
+    SafetyStop {
+        /// What for.
+        hazard: Hazard,
+    },
+    /// The supervisor let it go on.
+    SafetyClear,
+    /// The operator gave the mission up.
+    Aborted,
+    /// Every task done or skipped.
+    MissionDone,
+    /// The mission failed.
+    MissionFailed {
+        /// Why.
+        reason: String,
+    },
+    /// The operator's heartbeat stopped.
+    LinkLost,
+    /// It came back.
+    LinkRestored,
+    /// The robot stands at a plastering station and starts spraying.
+    StationStarted {
+        /// The task.
+        task: usize,
+        /// The station's index in the plan.
+        station: usize,
+        /// Stations in the plan.
+        stations: usize,
+        /// Where the robot stands from the station's pose (forward, left),
+        /// m.
+        offset_m: [f64; 2],
+        /// Its heading from the station's, rad.
+        heading_off_rad: f64,
+    },
+    /// A plastering survey looks again at a window's edge it bracketed
+    /// loosely: the body's camera swept slowly across it.
+    WindowEdgeLook {
+        /// The task.
+        task: usize,
+        /// The wall.
+        wall: WallName,
+        /// Where the edge was, along the wall, m.
+        along_m: f64,
+        /// How uncertain it was, m (standard deviation).
+        sigma_m: f64,
+    },
+    /// The camera on the tool found a window the plan did not know, at a
+    /// station: the plan keeps it out of the coat from that station on.
+    WindowFound {
+        /// The task.
+        task: usize,
+        /// The station.
+        station: usize,
+        /// The wall.
+        wall: String,
+        /// Its edges along the wall, m.
+        along_m: [f64; 2],
+        /// Its sill and head, m.
+        sill_head_m: [f64; 2],
+    },
+    /// No way to a plastering station keeps the body clear (a hall too
+    /// narrow to turn across): the station is left out of the plan, and
+    /// what only it reached is reported unreachable.
+    StationGivenUp {
+        /// The task.
+        task: usize,
+        /// The station's index in the plan before it was left out.
+        station: usize,
+        /// Plasterable area lost with it, m².
+        unreachable_m2: f64,
+    },
+    /// A surface's pass at a station is sprayed.
+    PassDone {
+        /// The task.
+        task: usize,
+        /// The station.
+        station: usize,
+        /// The surface.
+        surface: String,
+    },
+    /// The robot went through a door of the floor plan and its frame is
+    /// now the room beyond it.
+    RoomEntered {
+        /// The door of the plan.
+        door: usize,
+        /// The room, by its name on the plan.
+        room: String,
+    },
+    /// A plastering plan was made (again, after a survey).
+    PlanMade {
+        /// The task.
+        task: usize,
+        /// Its stations.
+        stations: usize,
+        /// Plasterable area it cannot reach, m².
+        unreachable_m2: f64,
+    },
+    /// An operator command could not be followed.
+    CommandRefused {
+        /// The command.
+        command: OperatorCommand,
+        /// Why.
+        reason: String,
+    },
+}

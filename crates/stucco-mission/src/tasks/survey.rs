@@ -1,0 +1,504 @@
+//! `map_room`: loops inside the room until its walls and size are known;
+//! and the loops a plastering survey drives round a room.
+
+use super::ways::{planned_way, way};
+use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
+use crate::behaviour::{Behaviour, BehaviourKind, go_to};
+use crate::executive::ExecutiveConfig;
+use crate::model::Estimate;
+use crate::task::WallName;
+use stucco_core::{DriveCommand, Pose2, VehicleSpec};
+
+/// Seconds a `map_room` loop driven corner to corner stands before its
+/// first leg: the floor map needs a score of echoes in a cell (the scans
+/// come at 10 Hz) to take something as standing there.
+const LOOK_ROUND_S: f64 = 6.0;
+
+/// Observes the room's walls while driving loops inside it.
+#[derive(Clone, Debug)]
+pub(crate) struct MapRoom {
+    path: Option<Vec<[f64; 2]>>,
+    walls: Vec<WallName>,
+    min_sightings: usize,
+    inset_m: f64,
+    speed_mps: f64,
+    max_size_sigma_m: f64,
+    timeout_s: f64,
+    ways: Behaviours,
+    /// The loop driven corner to corner.
+    legs: Option<Legs>,
+}
+
+impl MapRoom {
+    pub fn new(
+        path: Option<Vec<[f64; 2]>>,
+        walls: Vec<WallName>,
+        min_sightings: usize,
+        inset_m: f64,
+        speed_mps: f64,
+        max_size_sigma_m: f64,
+        timeout_s: f64,
+    ) -> Self {
+        MapRoom {
+            path,
+            walls,
+            min_sightings,
+            inset_m,
+            speed_mps,
+            max_size_sigma_m,
+            timeout_s,
+            ways: Behaviours::default(),
+            legs: None,
+        }
+    }
+}
+
+impl Task for MapRoom {
+    fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
+        let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
+        let speed_mps = self.speed_mps;
+        let corners = survey_loop(self.path.as_deref(), self.inset_m, est.room_m)?;
+        if turns_on_the_move(&corners, est.room_m, &config.vehicle) {
+            let loop_ = closed(&corners);
+            let (a, b) = (loop_[0], loop_[1]);
+            let towards = (b[1] - a[1]).atan2(b[0] - a[0]);
+            let queue = &mut self.ways.queue;
+            queue.extend(way(
+                config,
+                est,
+                &pose,
+                &Pose2::new(a[0], a[1], towards),
+                speed_mps,
+            ));
+            queue.push_back(Behaviour::path(&config.gains, loop_, speed_mps));
+        } else {
+            self.legs = Some(Legs::new(corners, None, speed_mps));
+        }
+        Ok(())
+    }
+
+    fn step(&mut self, cx: &mut TaskCx<'_>) -> TaskStep {
+        let (config, est) = (cx.config, cx.est);
+        let elapsed = cx.elapsed_s();
+        let (timeout_s, max_size_sigma_m, speed_mps) =
+            (self.timeout_s, self.max_size_sigma_m, self.speed_mps);
+        let walls = &self.walls;
+        let unseen: Vec<WallName> = walls
+            .iter()
+            .copied()
+            .filter(|w| est.walls_seen[w.index()] < self.min_sightings)
+            .collect();
+        // A side of the room is measured when both its walls are.
+        let listed = |a: WallName, b: WallName| walls.contains(&a) && walls.contains(&b);
+        let sides = [
+            listed(WallName::West, WallName::East),
+            listed(WallName::South, WallName::North),
+        ];
+        let loose: Vec<f64> = (0..2)
+            .filter(|&i| sides[i] && est.room_sigma_m[i] > max_size_sigma_m)
+            .map(|i| est.room_sigma_m[i])
+            .collect();
+        if elapsed > timeout_s {
+            return TaskStep::Failed(if unseen.is_empty() {
+                TaskFailure::RoomSizeLoose {
+                    sigma_m: loose.iter().fold(0.0f64, |m, &s| m.max(s)),
+                    timeout_s,
+                }
+            } else {
+                TaskFailure::WallsNotSeen {
+                    walls: unseen,
+                    timeout_s,
+                }
+            });
+        }
+        if let (true, Some(legs)) = (self.ways.idle(), self.legs.as_mut()) {
+            // The first leg waits for the laser to have found what
+            // stands on the floor near the robot (the plan that
+            // follows stands on it too).
+            if legs.under_way.is_none() && elapsed < LOOK_ROUND_S {
+                return TaskStep::Drive(DriveCommand::STOP);
+            }
+            // Corner to corner: done at any corner once the walls
+            // are known.
+            if unseen.is_empty() && loose.is_empty() {
+                return TaskStep::Done;
+            }
+            if legs.stuck() {
+                return TaskStep::Failed(TaskFailure::NoWayToCorners);
+            }
+            let way = legs.next(config, est).unwrap_or_default();
+            if way.is_empty() {
+                // No clear way to this corner: the next one, next
+                // tick.
+                return TaskStep::Drive(DriveCommand::STOP);
+            }
+            self.ways.queue.extend(way);
+        }
+        if self.legs.is_none() && self.ways.idle() {
+            if unseen.is_empty() && loose.is_empty() {
+                return TaskStep::Done;
+            }
+            // Another loop, from where the last one ended: each one
+            // sees the walls again.
+            match survey_loop(self.path.as_deref(), self.inset_m, est.room_m) {
+                Ok(l) => {
+                    let gains = &config.gains;
+                    let l = closed(&l);
+                    let towards = (l[1][1] - l[0][1]).atan2(l[1][0] - l[0][0]);
+                    let start = Pose2::new(l[0][0], l[0][1], towards);
+                    self.ways
+                        .queue
+                        .extend(go_to(gains, &est.pose, &start, speed_mps));
+                    self.ways
+                        .queue
+                        .push_back(Behaviour::path(gains, l, speed_mps));
+                }
+                Err(e) => return TaskStep::Failed(e),
+            }
+        }
+        // Let the task-level check decide on the next tick (a survey may
+        // loop again); stand still meanwhile.
+        TaskStep::Drive(self.ways.step(cx).unwrap_or(DriveCommand::STOP))
+    }
+
+    fn blocked(&mut self, cx: &mut TaskCx<'_>, blocked_s: f64) -> bool {
+        // So on a leg of a loop driven corner to corner.
+        if blocked_s > REPLAN_AFTER_S
+            && let Some(legs) = self.legs.as_mut()
+            && let Some(q) = legs.again(cx.config, cx.est)
+        {
+            self.ways.replace(q);
+            return true;
+        }
+        false
+    }
+
+    fn behaviour(&self) -> Option<&BehaviourKind> {
+        self.ways.kind()
+    }
+
+    fn clone_box(&self) -> Box<dyn Task> {
+        Box::new(self.clone())
+    }
+}
+
+/// A loop driven corner to corner (a `map_room`'s, or a plastering
+/// survey's where the room is too small to turn its corners on the move),
+/// each leg planned as it starts, on what the laser has found on the floor
+/// by then.
+#[derive(Clone, Debug)]
+pub(crate) struct Legs {
+    corners: Vec<[f64; 2]>,
+    /// A survey's loop: its corners are fitted again, as each leg starts,
+    /// to what the laser has found on the floor by then (a column in a
+    /// corner seen only once the loop is under way), with the margins and
+    /// the body's reach of `survey_rect`. None: a mission's own corners.
+    refit: Option<([f64; 2], [f64; 2])>,
+    /// Legs to drive in all; none: round and round until the task ends.
+    count: Option<usize>,
+    /// The leg under way (the first to the first corner); none before it.
+    pub(crate) under_way: Option<usize>,
+    /// Times the leg under way was planned again.
+    replans: usize,
+    /// Legs in a row that no clear way reached.
+    unreached: usize,
+    speed_mps: f64,
+}
+
+impl Legs {
+    fn new(corners: Vec<[f64; 2]>, count: Option<usize>, speed_mps: f64) -> Legs {
+        Legs {
+            corners,
+            refit: None,
+            count,
+            under_way: None,
+            replans: 0,
+            unreached: 0,
+            speed_mps,
+        }
+    }
+
+    /// True when no clear way reached any corner the last time round.
+    pub(crate) fn stuck(&self) -> bool {
+        self.unreached >= self.corners.len().max(1)
+    }
+
+    /// The next leg's way from where the robot stands; `None` when every
+    /// leg is driven. A corner no clear way reaches is left out (an
+    /// empty way).
+    pub(crate) fn next(
+        &mut self,
+        config: &ExecutiveConfig,
+        est: &Estimate,
+    ) -> Option<Vec<Behaviour>> {
+        let next = self.under_way.map_or(0, |k| k + 1);
+        if self.count.is_some_and(|c| next >= c) {
+            return None;
+        }
+        self.under_way = Some(next);
+        self.replans = 0;
+        if let Some((margins, half)) = self.refit
+            && let Some(corners) = survey_rect(est, margins, half, SURVEY_LEGS_MIN_M)
+        {
+            self.corners = corners.to_vec();
+        }
+        let way = self.leg(config, est, next);
+        self.unreached = if way.is_empty() {
+            self.unreached + 1
+        } else {
+            0
+        };
+        Some(way)
+    }
+
+    /// The leg under way planned again (something the map did not hold
+    /// blocks it), at most `MAX_REPLANS` times.
+    pub(crate) fn again(
+        &mut self,
+        config: &ExecutiveConfig,
+        est: &Estimate,
+    ) -> Option<Vec<Behaviour>> {
+        let k = self.under_way?;
+        (self.replans < MAX_REPLANS).then(|| {
+            self.replans += 1;
+            self.leg(config, est, k)
+        })
+    }
+
+    /// Leg `leg`: to corner `leg` (modulo their number), arriving faced to
+    /// the next, by the planned way.
+    fn leg(&self, config: &ExecutiveConfig, est: &Estimate, leg: usize) -> Vec<Behaviour> {
+        let n = self.corners.len();
+        if n == 0 {
+            return Vec::new();
+        }
+        let (a, b) = (self.corners[leg % n], self.corners[(leg + 1) % n]);
+        let goal = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
+        planned_way(config, est, &est.pose, &goal, self.speed_mps).map_or_else(Vec::new, |w| w.1)
+    }
+}
+
+/// A look at every wall before the plan is made again on what the camera
+/// found: one loop round the room, clockwise so the camera (looking left)
+/// faces each wall in turn. Where the room leaves room for it, the loop
+/// stands `clearance` from the walls and is turned on the move; where it
+/// does not (a small kitchen, a furnished bedroom), it runs nearer the
+/// walls, at `SURVEY_LEG_STANDOFF_M`, corner to corner, each leg the
+/// planned way as it starts (the legs returned). Either keeps clear of
+/// what stands on the floor; its start is reached by the planned way.
+pub(crate) fn survey_way(
+    config: &ExecutiveConfig,
+    clearance: f64,
+    est: &Estimate,
+    speed: f64,
+) -> (Vec<Behaviour>, Option<Legs>) {
+    let vehicle = &config.vehicle;
+    let [xs, ys] = est.room_m;
+    // What the body reaches toward the furniture beside the loop's long
+    // sides (half its width) and at its ends (its front, turning).
+    let side = survey_side_reach(vehicle);
+    let front = vehicle.front_m() + 0.15;
+    let half = if xs >= ys {
+        [front, side]
+    } else {
+        [side, front]
+    };
+    // The loop's ends stand off a little more: its corners are turned
+    // on the move, the front swinging out past them.
+    let ends = clearance + 0.2;
+    let margins = if xs >= ys {
+        [ends, clearance]
+    } else {
+        [clearance, ends]
+    };
+    if let Some(corners) = survey_rect(est, margins, half, SURVEY_LOOP_MIN_M) {
+        let path = closed(&corners);
+        let (a, b) = (path[0], path[1]);
+        let start = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
+        let mut way = self::way(config, est, &est.pose, &start, speed);
+        way.push(Behaviour::path(&config.gains, path, speed));
+        return (way, None);
+    }
+    (Vec::new(), survey_legs(vehicle, est, speed))
+}
+
+/// What the body reaches toward the furniture beside a survey loop's
+/// side: half its width and 0.15 m, m.
+fn survey_side_reach(vehicle: &VehicleSpec) -> f64 {
+    0.5 * vehicle.width_m + 0.15
+}
+
+/// A survey loop driven corner to corner, `SURVEY_LEG_STANDOFF_M` off the
+/// walls, stopping at each: to the first, then round to it, each leg the
+/// planned way, the corners fitted again to the floor map as each starts.
+/// None: the room leaves no loop.
+pub(crate) fn survey_legs(vehicle: &VehicleSpec, est: &Estimate, speed: f64) -> Option<Legs> {
+    let side = survey_side_reach(vehicle);
+    let fit = ([SURVEY_LEG_STANDOFF_M; 2], [side, side]);
+    let corners = survey_rect(est, fit.0, fit.1, SURVEY_LEGS_MIN_M)?;
+    let mut legs = Legs::new(corners.to_vec(), Some(corners.len() + 1), speed);
+    legs.refit = Some(fit);
+    Some(legs)
+}
+
+/// A plastering survey's loop turned on the move, stopped this long by
+/// something in its way, goes on corner to corner, s: the stops it meets
+/// at furniture it passes near mostly clear within 3.5 s (the two
+/// offices' table), and going on corner to corner costs ten times that.
+pub(crate) const SURVEY_BLOCKED_S: f64 = 5.0;
+
+/// Shortest side of a survey loop driven corner to corner, m.
+const SURVEY_LEGS_MIN_M: f64 = 0.3;
+
+/// Sides shorter than this make the survey loop, turned on the move, too
+/// small to see a window whole (a kitchen's 0.4 m): it is driven corner to
+/// corner nearer the walls instead, m.
+const SURVEY_LOOP_MIN_M: f64 = 0.6;
+
+/// How far from the walls a survey loop driven corner to corner runs, m.
+const SURVEY_LEG_STANDOFF_M: f64 = 0.6;
+
+/// The corners of a survey loop `margins` (along x, along y) inside the
+/// walls, moved off the furniture near the walls (each piece moves the
+/// side it stands before in by `half` — what the body reaches toward it
+/// across x and across y; of two, the one that costs the loop least), in
+/// the order it is driven: west along the south side first, the camera
+/// on the south wall. `None` when a side is shorter than `min_side`.
+fn survey_rect(
+    est: &Estimate,
+    margins: [f64; 2],
+    half: [f64; 2],
+    min_side: f64,
+) -> Option<[[f64; 2]; 4]> {
+    let [xs, ys] = est.room_m;
+    let [half_x, half_y] = half;
+    let (mut x0, mut x1, mut y0, mut y1) =
+        (margins[0], xs - margins[0], margins[1], ys - margins[1]);
+    for o in &est.obstacles {
+        let (cx, cy) = (
+            0.5 * (o.min_m[0] + o.max_m[0]),
+            0.5 * (o.min_m[1] + o.max_m[1]),
+        );
+        let (w, h) = (x1 - x0, y1 - y0);
+        // (loss of area, side, new place)
+        let mut moves: Vec<(f64, usize, f64)> = Vec::new();
+        if cx < 0.5 * xs && o.max_m[0] + half_x > x0 && o.max_m[0] < 0.5 * xs {
+            moves.push(((o.max_m[0] + half_x - x0) * h, 0, o.max_m[0] + half_x));
+        }
+        if cx > 0.5 * xs && o.min_m[0] - half_x < x1 && o.min_m[0] > 0.5 * xs {
+            moves.push(((x1 - (o.min_m[0] - half_x)) * h, 1, o.min_m[0] - half_x));
+        }
+        if cy < 0.5 * ys && o.max_m[1] + half_y > y0 && o.max_m[1] < 0.5 * ys {
+            moves.push(((o.max_m[1] + half_y - y0) * w, 2, o.max_m[1] + half_y));
+        }
+        if cy > 0.5 * ys && o.min_m[1] - half_y < y1 && o.min_m[1] > 0.5 * ys {
+            moves.push(((y1 - (o.min_m[1] - half_y)) * w, 3, o.min_m[1] - half_y));
+        }
+        // A piece reaching across the middle (a bed and a desk along a
+        // bedroom) that the body would meet: whichever side it cuts least.
+        // (Within the loop, clear of its sides by the body's half width
+        // and more, it is driven round.)
+        let r = half_x.min(half_y);
+        let meets = o.max_m[0] + r > x0
+            && o.min_m[0] - r < x1
+            && o.max_m[1] + r > y0
+            && o.min_m[1] - r < y1
+            && !(o.min_m[0] - r > x0
+                && o.max_m[0] + r < x1
+                && o.min_m[1] - r > y0
+                && o.max_m[1] + r < y1);
+        if moves.is_empty() && meets {
+            let cuts = [
+                (0, o.max_m[0] + half_x, x1 - (o.max_m[0] + half_x)),
+                (1, o.min_m[0] - half_x, (o.min_m[0] - half_x) - x0),
+                (2, o.max_m[1] + half_y, y1 - (o.max_m[1] + half_y)),
+                (3, o.min_m[1] - half_y, (o.min_m[1] - half_y) - y0),
+            ];
+            // On the robot's side of it, when it stands clear of it one
+            // way or the other (a piece across the whole room leaves no
+            // way to the other side).
+            let p = est.pose.position();
+            let robots_side = |side: usize| match side {
+                0 => p.x > o.max_m[0],
+                1 => p.x < o.min_m[0],
+                2 => p.y > o.max_m[1],
+                _ => p.y < o.min_m[1],
+            };
+            let any_side = cuts.iter().any(|c| c.2 > 0.0 && robots_side(c.0));
+            moves.extend(
+                cuts.into_iter()
+                    .filter(|c| c.2 > 0.0 && (!any_side || robots_side(c.0)))
+                    .map(|(side, at, left)| {
+                        let loss = if side < 2 {
+                            (w - left) * h
+                        } else {
+                            (h - left) * w
+                        };
+                        (loss, side, at)
+                    }),
+            );
+        }
+        if let Some(&(_, side, at)) = moves.iter().min_by(|a, b| a.0.total_cmp(&b.0)) {
+            match side {
+                0 => x0 = at,
+                1 => x1 = at,
+                2 => y0 = at,
+                _ => y1 = at,
+            }
+        }
+    }
+    (x1 - x0 >= min_side && y1 - y0 >= min_side).then_some([[x1, y0], [x0, y0], [x0, y1], [x1, y1]])
+}
+
+/// The survey loop: the given path or a rectangle `inset_m` inside the
+/// room.
+fn survey_loop(
+    path: Option<&[[f64; 2]]>,
+    inset_m: f64,
+    room_m: [f64; 2],
+) -> Result<Vec<[f64; 2]>, TaskFailure> {
+    if let Some(p) = path {
+        return Ok(p.to_vec());
+    }
+    let [xs, ys] = room_m;
+    if 2.0 * inset_m >= xs.min(ys) {
+        return Err(TaskFailure::NoLoop { inset_m, room_m });
+    }
+    Ok(vec![
+        [inset_m, inset_m],
+        [xs - inset_m, inset_m],
+        [xs - inset_m, ys - inset_m],
+        [inset_m, ys - inset_m],
+    ])
+}
+
+/// Margin a loop's corners keep from the walls beyond the front's reach
+/// ahead of the rear axle, for the loop to be turned on the move, m.
+const ON_THE_MOVE_SPARE_M: f64 = 0.1;
+
+/// True when a `map_room` loop through `corners` can be driven as one path,
+/// its corners turned on the move: the front swings out past each corner
+/// by as much as its reach ahead of the rear axle, and every corner stands
+/// that far and `ON_THE_MOVE_SPARE_M` more from every wall. A loop in a
+/// furnished bedroom, between the bed and the wall, does not.
+fn turns_on_the_move(corners: &[[f64; 2]], room_m: [f64; 2], vehicle: &VehicleSpec) -> bool {
+    let reach = vehicle.front_m() + ON_THE_MOVE_SPARE_M;
+    corners
+        .iter()
+        .all(|&[x, y]| x.min(room_m[0] - x) >= reach && y.min(room_m[1] - y) >= reach)
+}
+
+/// The loop through `points` as a path that starts and ends halfway along
+/// its first side: every corner is turned on the move, and the next loop
+/// goes on from where this one ends, heading its way.
+fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let (Some(&a), Some(&b)) = (points.first(), points.get(1)) else {
+        return points.to_vec();
+    };
+    let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    let mut p = vec![mid];
+    p.extend_from_slice(&points[1..]);
+    p.push(a);
+    p.push(mid);
+    p
+}
