@@ -86,7 +86,11 @@ impl Site<'_> {
             assert!(err.is_err(), "a viewer's command got through: {err:?}");
         }
         let state = ann.state(name, Duration::from_secs(3)).unwrap();
-        assert_eq!(state["task"][1], "wait_for_operator", "{state}");
+        assert_eq!(
+            state.task.as_ref().map(|t| t.1.as_str()),
+            Some("wait_for_operator"),
+            "{state:?}"
+        );
         // The operator commands.
         let r = ann.send(name, Command::Status, 10.0, None).unwrap();
         assert_eq!(r.ack.reply, Reply::Done);

@@ -103,12 +103,10 @@ fn an_operator_commands_a_robot_over_zenoh() {
     }
     std::thread::sleep(Duration::from_millis(600));
     let state = op.state("r1", Duration::from_secs(3)).unwrap();
-    assert_eq!(state["mission"]["state"], "paused", "{state}");
+    assert_eq!(state.mission.name(), "paused", "{state:?}");
     assert!(
-        state["mission"]["reason"]
-            .as_str()
-            .is_some_and(|r| r.contains("link")),
-        "{state}"
+        state.mission.reason().is_some_and(|r| r.contains("link")),
+        "{state:?}"
     );
     robot.stop();
 }

@@ -51,7 +51,7 @@ pub use plastering::{
     time_lower_bound,
 };
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
-pub use robot::{PlatformKind, RobotJob, RobotRun, RobotState, run_robot};
+pub use robot::{PlatformKind, RobotJob, RobotRun, run_robot};
 pub use sim_robot::{
     LawDriven, Served, SimRobot, Simulated, WorldKeeper, load_world, mission_sim_config,
     mission_simulator, robot_on, robot_spec, sim_robot,

@@ -5,7 +5,7 @@
 use anyhow::{Result, anyhow};
 use serde::Serialize;
 use std::time::{Duration, Instant};
-use stucco_core::{Ack, Command, Reply, Stamp, Telecommand};
+use stucco_core::{Ack, Command, Reply, RobotState, Stamp, Telecommand};
 use stucco_link::{LinkConfig, OperatorClient, ScanFrame, keys, parse};
 use stucco_mission::{Estimate, PlasterCoverage};
 use stucco_plan::SurfaceId;
@@ -54,8 +54,8 @@ impl Operator {
         })
     }
 
-    /// The robot's next published state (JSON).
-    pub fn state(&self, robot: &str, within: Duration) -> Result<serde_json::Value> {
+    /// The robot's next published state.
+    pub fn state(&self, robot: &str, within: Duration) -> Result<RobotState> {
         let sub = self.client.watch(keys::state(robot))?;
         let until = Instant::now() + within;
         while let Some(left) = until.checked_duration_since(Instant::now()) {
@@ -68,11 +68,7 @@ impl Operator {
 
     /// The robot's clock: the stamp of its latest state.
     pub fn robot_time(&self, robot: &str, within: Duration) -> Result<Stamp> {
-        let v = self.state(robot, within)?;
-        v["stamp"]
-            .as_i64()
-            .map(Stamp::from_nanos)
-            .ok_or_else(|| anyhow!("{robot}'s state has no stamp"))
+        Ok(self.state(robot, within)?.stamp)
     }
 
     fn telecommand(&mut self, now: Stamp, deadline_s: f64, command: Command) -> Telecommand {
@@ -264,9 +260,10 @@ impl Operator {
             }
             if let Some(s) = latest
                 && (json || shown.elapsed() >= Duration::from_secs(1))
-                && let Ok(v) = parse::<serde_json::Value>(&s)
+                && let (Ok(v), Ok(state)) =
+                    (parse::<serde_json::Value>(&s), parse::<RobotState>(&s))
             {
-                let line = view.state_line(&v);
+                let line = view.state_line(&state);
                 emit("state", v, Some(line));
                 shown = Instant::now();
             }
@@ -295,6 +292,31 @@ fn secs(v: &serde_json::Value) -> f64 {
 
 /// A JSON value in a few words: a string as it is, an object by its tag
 /// (or its only key), anything else compact.
+/// Text a robot sent, made safe for a terminal: control characters
+/// escaped (none can forge a line or move the cursor), at most
+/// [`PRINTED_CHARS`] characters.
+fn printable(text: &str) -> String {
+    let mut out: String = text
+        .chars()
+        .take(PRINTED_CHARS)
+        .flat_map(|c| {
+            let escaped: Vec<char> = if c.is_control() {
+                c.escape_default().collect()
+            } else {
+                vec![c]
+            };
+            escaped
+        })
+        .collect();
+    if text.chars().nth(PRINTED_CHARS).is_some() {
+        out.push('…');
+    }
+    out
+}
+
+/// The most characters of one field a line shows.
+const PRINTED_CHARS: usize = 120;
+
 fn short(v: &serde_json::Value) -> String {
     match v {
         serde_json::Value::String(s) => s.clone(),
@@ -342,37 +364,35 @@ fn tagged_line(topic: &str, v: &serde_json::Value) -> String {
 }
 
 impl WatchView {
-    fn state_line(&self, v: &serde_json::Value) -> String {
-        let mission = &v["mission"];
-        let mut mode = short(mission);
-        if let Some(why) = mission["reason"].as_str() {
-            mode = format!("{mode} ({why})");
+    fn state_line(&self, v: &RobotState) -> String {
+        let mut mode = v.mission.name().to_owned();
+        if let Some(why) = v.mission.reason() {
+            mode = format!("{mode} ({})", printable(why));
         }
-        let task = match v["task"].as_array() {
-            Some(t) if t.len() == 2 => format!("task {} {}", t[0], short(&t[1])),
-            _ => "no task".to_owned(),
+        let task = match &v.task {
+            Some((k, name)) => format!("task {k} {}", printable(name)),
+            None => "no task".to_owned(),
         };
-        let pose = &v["pose"];
-        let f = |x: &serde_json::Value| x.as_f64().unwrap_or(f64::NAN);
         // The pose's frame is the room's, when the robot follows a plan.
-        let room = v["room"]
-            .as_str()
-            .map_or_else(String::new, |r| format!(" in {r}"));
+        let room = v
+            .room
+            .as_deref()
+            .map_or_else(String::new, |r| format!(" in {}", printable(r)));
         let mut line = format!(
             "{:>9.1} s  state  {mode} · {task} · {}  pose{room} {:.2} {:.2} m {:.1}°  σ {:.1} cm  drive {:.2} m/s",
-            secs(v),
-            short(&v["behaviour"]),
-            f(&pose["x"]),
-            f(&pose["y"]),
-            f(&pose["theta"]).to_degrees(),
-            100.0 * f(&v["position_sigma_m"]),
-            f(&v["drive"]["speed_mps"]),
+            v.stamp.as_secs_f64(),
+            v.behaviour.as_ref().map_or("-", |b| b.name()),
+            v.pose.x,
+            v.pose.y,
+            v.pose.theta.to_degrees(),
+            100.0 * v.position_sigma_m,
+            v.drive.speed_mps,
         );
         if let Some(d) = self.nearest_m {
             line += &format!("  nearest {d:.2} m");
         }
-        if !v["hazard"].is_null() {
-            line += &format!("  HOLD: {}", short(&v["hazard"]));
+        if let Some(h) = v.hazard {
+            line += &format!("  HOLD: {}", h.name());
         }
         line
     }
@@ -452,6 +472,16 @@ impl EventFeed {
 mod tests {
     use super::*;
     use stucco_mission::{SurfaceCoverage, WallName};
+
+    #[test]
+    fn text_from_a_robot_cannot_forge_a_line() {
+        assert_eq!(printable("link lost"), "link lost");
+        let forged = printable("ok\n     12.0 s  state  done\u{1b}[2K");
+        assert!(!forged.chars().any(char::is_control), "{forged}");
+        assert!(forged.contains("\\n"), "{forged}");
+        let long = printable(&"x".repeat(1_000_000));
+        assert_eq!(long.chars().count(), PRINTED_CHARS + 1);
+    }
 
     #[test]
     fn coverage_reads_as_a_line_shown_when_it_moves_on() {

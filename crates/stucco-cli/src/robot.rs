@@ -10,9 +10,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use stucco_core::{DriveCommand, Platform, Pose2, Stamp};
+use stucco_core::{Platform, RobotState};
 use stucco_link::{Denial, LinkConfig, RobotLink, ScanFrame, Session, ZenohPlatform};
-use stucco_mission::{BehaviourKind, Hazard, Inputs, MissionMode, Outputs};
+use stucco_mission::{Inputs, Outputs};
 use stucco_runtime::{BadInput, DT_S, Mission, Robot, Sink, SinkError, read_checkpoint};
 
 /// The robot's body.
@@ -58,32 +58,6 @@ pub struct RobotJob {
     pub platform_timeout: Duration,
 }
 
-/// The robot's state as `stucco/NAME/state` publishes it.
-#[derive(Clone, Debug, Serialize)]
-pub struct RobotState<'a> {
-    /// Simulated time.
-    pub stamp: Stamp,
-    /// The robot's name.
-    pub name: &'a str,
-    /// The mission's state.
-    pub mission: &'a MissionMode,
-    /// The task under way: index and name.
-    pub task: Option<(usize, &'static str)>,
-    /// The behaviour under way.
-    pub behaviour: Option<&'a BehaviourKind>,
-    /// The floor plan's room the robot is in (the pose's frame), when the
-    /// mission has a plan.
-    pub room: Option<&'a str>,
-    /// The estimated pose in the room.
-    pub pose: Pose2,
-    /// Its position σ, m.
-    pub position_sigma_m: f64,
-    /// What the supervisor holds the robot for.
-    pub hazard: Option<Hazard>,
-    /// The drive command going out, after the supervisor.
-    pub drive: DriveCommand,
-}
-
 /// Control periods between two published scans (10 a second).
 const SCAN_EVERY: u64 = 5;
 /// Control periods in a second.
@@ -125,11 +99,11 @@ impl<P: Platform> Sink<P> for Telemetry<'_> {
         // watcher sees a stop when it happens.
         self.link.publish_state(&RobotState {
             stamp: now,
-            name: self.name,
-            mission: exec.mode(),
-            task: exec.current_task(),
-            behaviour: exec.current_behaviour(),
-            room: robot.perception().room_name(),
+            name: self.name.to_owned(),
+            mission: exec.mode().clone(),
+            task: exec.current_task().map(|(k, t)| (k, t.to_owned())),
+            behaviour: exec.current_behaviour().cloned(),
+            room: robot.perception().room_name().map(str::to_owned),
             pose: est.pose,
             position_sigma_m: est.position_sigma_m,
             hazard: exec.hazard(),

@@ -36,6 +36,7 @@ mod robot;
 mod scan;
 mod spray;
 mod stamp;
+mod telemetry;
 mod text;
 mod vehicle;
 
@@ -52,6 +53,7 @@ pub use spray::{
     path_density,
 };
 pub use stamp::{ParseStampError, Stamp};
+pub use telemetry::{BehaviourKind, Hazard, MissionMode, PivotPhase, RobotState};
 pub use text::{NonFinite, first_non_finite, line_column};
 pub use vehicle::VehicleSpec;
 

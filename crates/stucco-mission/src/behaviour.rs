@@ -3,8 +3,8 @@
 
 use crate::model::{Estimate, WallGeometry};
 use crate::task::{Side, WallName};
-use serde::Serialize;
 use stucco_control::{GainSchedule, PathFollower, PoseRegulator, WallFollower, WallSide};
+pub use stucco_core::{BehaviourKind, PivotPhase};
 use stucco_core::{DriveCommand, Pose2, Stamp, VehicleSpec, wrap_angle};
 
 /// Heading error a pivot stops at, rad.
@@ -43,60 +43,6 @@ pub enum Step {
     Drive(DriveCommand),
     /// Finished.
     Done,
-}
-
-/// The phases of a turn on the spot.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PivotPhase {
-    /// Standing, the front wheel turning to ±90°.
-    Steer,
-    /// Driving the wheel across: the robot turns about its rear axle.
-    Turn,
-    /// Standing, the wheel coming back straight.
-    Straighten,
-}
-
-/// What a behaviour is doing, for the state report.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-#[serde(tag = "behaviour", rename_all = "snake_case")]
-pub enum BehaviourKind {
-    /// Standing still.
-    Hold,
-    /// Turning on the spot to `heading_rad`.
-    Pivot {
-        /// The heading, rad.
-        heading_rad: f64,
-        /// The phase.
-        phase: PivotPhase,
-    },
-    /// Driving along the line through `goal` to it.
-    Regulate {
-        /// The goal pose.
-        goal: Pose2,
-    },
-    /// Backing along the line through `goal` (the robot facing along its
-    /// heading) to it.
-    Reverse {
-        /// The goal pose.
-        goal: Pose2,
-    },
-    /// Following a wall at a standoff up to a position along it.
-    FollowWall {
-        /// The wall.
-        wall: WallName,
-        /// The standoff, m.
-        standoff_m: f64,
-        /// Where it stops along the wall, m.
-        to_m: f64,
-    },
-    /// Following a path of segments.
-    Path {
-        /// The segment being followed.
-        segment: usize,
-        /// Segments in all.
-        segments: usize,
-    },
 }
 
 /// A behaviour with its law and progress.

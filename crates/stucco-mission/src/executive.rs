@@ -14,6 +14,7 @@ use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use stucco_control::GainSchedule;
+pub use stucco_core::MissionMode;
 use stucco_core::{
     Ack, Command, DriveCommand, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec,
 };
@@ -38,40 +39,6 @@ pub enum OperatorCommand {
     Skip,
     /// The answer a `wait_for_operator` task waits for.
     Continue,
-}
-
-/// The mission's state.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-#[serde(tag = "state", rename_all = "snake_case")]
-pub enum MissionMode {
-    /// Carrying out its tasks.
-    Running,
-    /// Stopped by the operator or a fault, waiting for `resume`.
-    Paused {
-        /// Why.
-        reason: String,
-    },
-    /// Stopped by the e-stop; waits for its release and `resume`.
-    EStopped,
-    /// Every task done or skipped.
-    Done,
-    /// A task failed.
-    Failed {
-        /// Why.
-        reason: String,
-    },
-    /// Given up by the operator.
-    Aborted,
-}
-
-impl MissionMode {
-    /// True once the mission is over.
-    pub fn is_final(&self) -> bool {
-        matches!(
-            self,
-            MissionMode::Done | MissionMode::Failed { .. } | MissionMode::Aborted
-        )
-    }
 }
 
 /// A task's state.

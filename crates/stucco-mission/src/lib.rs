@@ -25,13 +25,19 @@
 //! [`Progress`] is what a checkpoint keeps, so a mission started again
 //! resumes where it stopped.
 //!
-//! Pure: time comes in with each [`Executive::tick`], nothing is read from
-//! a clock or written to disk here.
+//! The files a job is written in live here too: the mission file
+//! ([`Mission`], checked with the file, line and column of each fault) and
+//! the checkpoint ([`Checkpoint`], written atomically, refused when made
+//! for another mission) — the crate's only I/O. The executive itself is
+//! pure: time comes in with each [`Executive::tick`], nothing is read from
+//! a clock.
 #![warn(missing_docs)]
 
 mod behaviour;
+mod checkpoint;
 mod event;
 mod executive;
+mod file;
 mod floor;
 mod manoeuvre;
 mod model;
@@ -42,9 +48,15 @@ mod task;
 mod tasks;
 
 pub use behaviour::{Behaviour, BehaviourKind, PivotPhase, Step, go_to};
+pub use checkpoint::{
+    CHECKPOINT_FILE, Checkpoint, PLAN_FILE, RoomMap, digest, read_checkpoint, write_atomic,
+};
 pub use executive::{
     Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode, OperatorCommand, Outputs,
     PARK_NOZZLE_M, Progress, ProgressMismatch, TaskStatus,
+};
+pub use file::{
+    BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge, line_of, parse_toml,
 };
 pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom};
 pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wall};

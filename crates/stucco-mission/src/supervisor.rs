@@ -5,6 +5,7 @@
 use crate::model::Estimate;
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
+pub use stucco_core::Hazard;
 use stucco_core::{DriveCommand, Pose2, Twist2, VehicleSpec};
 
 /// What to do when the pose estimate is lost (its σ past the limits).
@@ -109,16 +110,6 @@ impl SafetyConfig {
             .find(|(_, ok)| !ok)
             .map(|(k, _)| (k, "must be a number in range (margins ≥ 0, the rest > 0)"))
     }
-}
-
-/// Why the supervisor stopped the robot.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Hazard {
-    /// Something in the protective field.
-    Obstacle,
-    /// The pose estimate is too uncertain to drive on.
-    Lost,
 }
 
 /// The supervisor's verdict on one command.

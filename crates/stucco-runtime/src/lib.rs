@@ -10,10 +10,11 @@
 //!   ([`DT_S`]); what the loop produces leaves it through [`Sink`]s
 //!   (events, checkpoints, recordings, telemetry, scores).
 //! - [`Mission`]: a mission file (`missions/*.toml`), checked with the
-//!   file, line and field of each fault ([`BadInput`]).
+//!   file, line and field of each fault ([`BadInput`]) — stucco-mission's,
+//!   re-exported.
 //! - [`EventLog`]: the executive's events as JSON lines.
-//! - [`Checkpoint`], [`Checkpointer`]: a job's progress written after every
-//!   unit of work and read back to resume.
+//! - [`Checkpointer`]: a job's progress written after every unit of work
+//!   ([`Checkpoint`], stucco-mission's file) and read back to resume.
 //!
 //! Nothing here knows the simulator, zenoh or the terminal: the simulator
 //! is one platform (`stucco-sim`), a robot on zenoh another.
@@ -61,17 +62,15 @@
 
 mod checkpoint;
 mod event_log;
-mod mission;
 mod perception;
 mod robot;
 
-pub use checkpoint::{
-    CHECKPOINT_FILE, Checkpoint, Checkpointer, PLAN_FILE, RoomMap, TaskTimes, digest,
-    read_checkpoint, windows_by_room, write_atomic,
-};
+pub use checkpoint::{Checkpointer, TaskTimes, windows_by_room};
 pub use event_log::EventLog;
-pub use mission::{
-    BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge, line_of, parse_toml,
-};
 pub use perception::{DT_S, OBSTACLE_HEIGHT_M, Perception, RoomWindows};
 pub use robot::{Robot, Sink, SinkError};
+// The job's files are stucco-mission's; here for the runtime's users.
+pub use stucco_mission::{
+    BadInput, CHECKPOINT_FILE, Checkpoint, Corridor, DoorPassage, Mission, PLAN_FILE, RoomMap,
+    RoomSize, Start, StartKnowledge, digest, line_of, parse_toml, read_checkpoint, write_atomic,
+};

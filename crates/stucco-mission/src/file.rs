@@ -3,14 +3,12 @@
 //! one of the navigation experiments of paper A, run by `stucco run`. Every
 //! table is `deny_unknown_fields`; errors name the file, line and column.
 
+use crate::{Executive, ExecutiveConfig, FloorPlan, PlanDoor, PlanRoom, SafetyConfig, TaskSpec};
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use stucco_control::GainSchedule;
 use stucco_core::{Pose2, RobotSpec};
-use stucco_mission::{
-    Executive, ExecutiveConfig, FloorPlan, PlanDoor, PlanRoom, SafetyConfig, TaskSpec,
-};
 
 /// Input that cannot be used as it is (a mission file, a checkpoint):
 /// `stucco run` exits with 2 on it.
