@@ -204,7 +204,7 @@ impl Deposition {
         if !from.spray || from.aim != to.aim {
             return;
         }
-        let volume = self.spec.flow_m3ps * dt_s;
+        let volume = self.command.flow_m3ps.unwrap_or(self.spec.flow_m3ps) * dt_s;
         self.sprayed_m3 += volume;
         let ray = |pose: &Pose2, nozzle: [f64; 3], aim: Aim| {
             let p = pose.transform_point(&nalgebra::Point2::new(nozzle[0], nozzle[1]));

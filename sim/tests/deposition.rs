@@ -89,6 +89,7 @@ fn a_standing_nozzle_lays_its_footprint_where_it_points() {
         nozzle_m: [0.3, 0.4, 0.5],
         aim: Aim::Left,
         spray: false,
+        flow_m3ps: None,
     };
     s.tool(at);
     s.advance(2.0);
@@ -133,6 +134,7 @@ fn a_stroke_up_into_the_window_counts_its_overspray() {
         nozzle_m: [0.3, 0.4, 0.3],
         aim: Aim::Left,
         spray: false,
+        flow_m3ps: None,
     };
     s.tool(low);
     s.advance(2.0);
@@ -163,6 +165,7 @@ fn the_ceiling_takes_what_is_sprayed_up() {
         nozzle_m: [0.3, 0.0, 2.3],
         aim: Aim::Up,
         spray: false,
+        flow_m3ps: None,
     };
     s.tool(up);
     s.advance(3.0);
@@ -194,6 +197,7 @@ fn the_camera_on_the_tool_looks_from_where_the_nozzle_is() {
         nozzle_m: [0.3, 0.4, 0.8],
         aim: Aim::Left,
         spray: false,
+        flow_m3ps: None,
     });
     s.advance(2.0);
     let p = loop {
@@ -226,4 +230,30 @@ fn the_camera_on_the_tool_looks_from_where_the_nozzle_is() {
         }
     };
     assert_eq!(body.origin_m, [0.0, 0.0, CameraSpec::default().height_m]);
+}
+
+#[test]
+fn a_command_with_its_own_flow_sprays_that_flow() {
+    // A task's own spray settings (a second coat at another flow): the
+    // sprayer lays what the command says, not its own flow.
+    let mut s = sim();
+    let at = ToolCommand {
+        nozzle_m: [0.3, 0.4, 0.5],
+        aim: Aim::Left,
+        spray: false,
+        flow_m3ps: Some(0.6 * FLOW_M3PS),
+    };
+    s.tool(at);
+    s.advance(2.0);
+    s.tool(ToolCommand { spray: true, ..at });
+    s.advance(1.0);
+    s.tool(at);
+    s.advance(0.1);
+    assert!(
+        (s.sprayed_m3() - 0.6 * FLOW_M3PS).abs() < 0.02 * FLOW_M3PS,
+        "{}",
+        s.sprayed_m3()
+    );
+    let (volume, _, _) = moments(south(&s));
+    assert!((volume - s.sprayed_m3()).abs() < 1e-3 * volume, "{volume}");
 }

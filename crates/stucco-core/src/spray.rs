@@ -48,6 +48,10 @@ pub struct ToolCommand {
     pub aim: Aim,
     /// Plaster flowing.
     pub spray: bool,
+    /// Flow while spraying when it is not the sprayer's own (a task's own
+    /// spray settings), m³/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flow_m3ps: Option<f64>,
 }
 
 impl ToolCommand {

@@ -364,6 +364,36 @@ impl Mission {
                     i + 1
                 );
             }
+            // A plaster task's own spray settings over the mission's
+            // make a tool of their own, checked as [spray] is.
+            if let (
+                TaskSpec::Plaster {
+                    spray: Some(settings),
+                    ..
+                },
+                Some(base),
+            ) = (task, &mission.spray)
+            {
+                let line = line_of_task(&text, i, "spray");
+                match crate::spray_with(base, settings) {
+                    Err(why) => bad!(
+                        "{}:{line}: task {} (plaster): spray: {why}",
+                        path.display(),
+                        i + 1
+                    ),
+                    Ok(tool) => {
+                        if let Err(stucco_plan::PlanError::Tool { field, why }) =
+                            tool.validate(RobotSpec::default().vehicle.width_m)
+                        {
+                            bad!(
+                                "{}:{line}: task {} (plaster): spray {field}: {why}",
+                                path.display(),
+                                i + 1
+                            );
+                        }
+                    }
+                }
+            }
             if let Some((key, why)) = task.invalid() {
                 bad!(
                     "{}:{}: task {} ({}): {key}: {why}",
@@ -640,4 +670,64 @@ pub fn line_of(text: &str, table: &str, key: &str) -> usize {
         }
     }
     header
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    const TWO_COATS: &str = r#"
+name = "two coats"
+
+[start]
+room_m = [5.0, 3.0]
+room_sigma_m = 0.1
+
+[spray]
+thickness_mm = 10.0
+
+[[task]]
+task = "plaster"
+
+[[task]]
+task = "plaster"
+spray = { thickness_mm = 5.0, flow_l_per_min = 6.0 }
+"#;
+
+    #[test]
+    fn a_second_coat_carries_its_own_spray_settings() {
+        let m = Mission::parse(TWO_COATS, Path::new("two-coats.toml")).expect("a mission");
+        let base = m.spray.as_ref().expect("[spray]");
+        let coats: Vec<f64> = m
+            .tasks
+            .iter()
+            .map(|t| match t {
+                TaskSpec::Plaster { spray: None, .. } => base.thickness_mm,
+                TaskSpec::Plaster { spray: Some(s), .. } => {
+                    crate::spray_with(base, s).expect("settings").thickness_mm
+                }
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(coats, [10.0, 5.0]);
+    }
+
+    #[test]
+    fn a_task_s_bad_spray_settings_are_named_with_their_line() {
+        // Not a setting of the tool.
+        let text = TWO_COATS.replace("thickness_mm = 5.0,", "thick_mm = 5.0,");
+        let e = Mission::parse(&text, Path::new("two-coats.toml"))
+            .expect_err("no such setting")
+            .to_string();
+        assert!(e.starts_with("two-coats.toml:16:"), "{e}");
+        assert!(e.contains("thick_mm"), "{e}");
+        // A coat the tool cannot lay at its flow.
+        let text = TWO_COATS.replace(", flow_l_per_min = 6.0", "");
+        let e = Mission::parse(&text, Path::new("two-coats.toml"))
+            .expect_err("strokes too fast")
+            .to_string();
+        assert!(e.starts_with("two-coats.toml:16:"), "{e}");
+        assert!(e.contains("flow_l_per_min"), "{e}");
+    }
 }

@@ -62,5 +62,5 @@ pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom};
 pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wall};
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};
-pub use task::{Landmark, OnTimeout, Region, Side, TaskSpec, WallName};
+pub use task::{Landmark, OnTimeout, Region, Side, SpraySettings, TaskSpec, WallName, spray_with};
 pub use tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw};

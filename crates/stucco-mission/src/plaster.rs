@@ -298,6 +298,7 @@ impl PlasterRun {
             ],
             aim,
             spray,
+            flow_m3ps: None,
         })
     }
 

@@ -3,6 +3,27 @@
 
 use serde::{Deserialize, Serialize};
 pub use stucco_core::{Landmark, Region, Side, WallName};
+use stucco_plan::SprayTool;
+
+/// A `plaster` task's own spray settings: fields of the `[spray]` table
+/// (see [`SprayTool`]), each over the mission's.
+pub type SpraySettings = serde_json::Map<String, serde_json::Value>;
+
+/// `base` with `settings` over it, field by field; why not, when a
+/// setting is not one of the tool's or its value is of the wrong kind.
+pub fn spray_with(base: &SprayTool, settings: &SpraySettings) -> Result<SprayTool, String> {
+    let mut tool = serde_json::to_value(base).map_err(|e| e.to_string())?;
+    let Some(fields) = tool.as_object_mut() else {
+        return Err("the spray tool is not a table".to_owned());
+    };
+    for (key, value) in settings {
+        if !fields.contains_key(key) {
+            return Err(format!("{key}: not a setting of the spray tool"));
+        }
+        fields.insert(key.clone(), value.clone());
+    }
+    serde_json::from_value(tool).map_err(|e| e.to_string())
+}
 
 /// What a [`TaskSpec::WaitForOperator`] does when nobody answers in time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -221,6 +242,11 @@ pub enum TaskSpec {
         /// `ceiling = false`).
         #[serde(default)]
         region: Option<Region>,
+        /// This task's own spray settings over the mission's `[spray]`,
+        /// field by field (`spray = { thickness_mm = 5.0 }`: a thinner
+        /// second coat is a task of its own).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        spray: Option<SpraySettings>,
     },
     /// Stops and waits for the operator's `continue`.
     WaitForOperator {
@@ -309,6 +335,7 @@ impl TaskSpec {
                 survey: true,
                 survey_speed_mps: survey_loop_speed(),
                 region: *region,
+                spray: None,
             },
             _ => return None,
         })

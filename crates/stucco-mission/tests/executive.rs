@@ -1080,6 +1080,7 @@ fn plaster(survey: bool) -> TaskSpec {
         survey,
         survey_speed_mps: 0.3,
         region: None,
+        spray: None,
     }
 }
 
@@ -2333,4 +2334,78 @@ fn a_map_room_loop_no_clear_way_reaches_fails_saying_so_without_moving_into_anyt
         "{reason}"
     );
     assert!((robot.pose.position() - Point2::new(2.5, 1.5)).norm() < 1e-6);
+}
+
+#[test]
+fn a_second_coat_of_another_thickness_is_a_task_with_its_own_settings() {
+    #[derive(serde::Deserialize)]
+    struct File {
+        task: Vec<TaskSpec>,
+    }
+    let f: File = toml::from_str(
+        r#"
+        [[task]]
+        task = "plaster"
+        walls = ["south"]
+        ceiling = false
+        survey = false
+
+        [[task]]
+        task = "plaster"
+        walls = ["south"]
+        ceiling = false
+        survey = false
+        spray = { thickness_mm = 5.0, flow_l_per_min = 6.0 }
+        "#,
+    )
+    .expect("a mission with two coats");
+    let base = stucco_plan::SprayTool::default();
+    let TaskSpec::Plaster {
+        spray: Some(second),
+        ..
+    } = &f.task[1]
+    else {
+        panic!("{:?}", f.task[1]);
+    };
+    let thinner = spray_with(&base, second).expect("settings of the tool");
+    assert_eq!(thinner.thickness_mm, 5.0);
+    assert_eq!(thinner.flow_l_per_min, 6.0);
+    assert_eq!(thinner.footprint_sigma_m, base.footprint_sigma_m);
+    // A setting the tool does not have, or of the wrong kind, is named.
+    let mut bad = SpraySettings::new();
+    bad.insert("thickness".to_owned(), 5.0.into());
+    assert!(spray_with(&base, &bad).unwrap_err().contains("thickness"));
+    bad.clear();
+    bad.insert("thickness_mm".to_owned(), "thin".into());
+    assert!(spray_with(&base, &bad).is_err());
+    // Each coat is planned with its own thickness: the second one's
+    // strokes, laying less plaster per m², take less time.
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = Executive::new(
+        ExecutiveConfig {
+            spray: Some(base.clone()),
+            ..config(true)
+        },
+        f.task,
+    );
+    let mut plans: BTreeMap<usize, stucco_plan::Plan> = BTreeMap::new();
+    run(&mut exec, &mut robot, 60.0, |_, exec| {
+        match (exec.current_task(), exec.plaster_plan()) {
+            (Some((task, "plaster")), Some(plan)) if !plans.contains_key(&task) => {
+                plans.insert(task, plan.clone());
+                // Planned: on with the next coat.
+                vec![OperatorCommand::Skip]
+            }
+            _ => Vec::new(),
+        }
+    });
+    assert_eq!(plans.len(), 2, "{:?}", exec.status());
+    assert_eq!(plans[&0].tool.thickness_mm, 10.0);
+    assert_eq!(plans[&1].tool.thickness_mm, 5.0);
+    assert!(
+        plans[&1].spray_s() < plans[&0].spray_s(),
+        "{} s then {} s",
+        plans[&0].spray_s(),
+        plans[&1].spray_s()
+    );
 }

@@ -141,6 +141,11 @@ pub enum TaskFailure {
         /// The station.
         station: usize,
     },
+    /// `plaster`: the task's own spray settings do not make a tool.
+    SpraySettings {
+        /// Why.
+        error: String,
+    },
 }
 
 impl TaskFailure {
@@ -174,6 +179,7 @@ impl TaskFailure {
             TaskFailure::CheckpointPlanMissing { .. } => "checkpoint_plan_missing",
             TaskFailure::CheckpointPlanDiffers { .. } => "checkpoint_plan_differs",
             TaskFailure::NotFacingSurface { .. } => "not_facing_surface",
+            TaskFailure::SpraySettings { .. } => "spray_settings",
         }
     }
 }
@@ -273,6 +279,7 @@ impl std::fmt::Display for TaskFailure {
                 f,
                 "plaster: the robot does not face the surface of station {station}"
             ),
+            TaskFailure::SpraySettings { error } => write!(f, "plaster: spray: {error}"),
         }
     }
 }

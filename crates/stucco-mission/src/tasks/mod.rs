@@ -248,6 +248,7 @@ impl TaskSpec {
                 survey,
                 survey_speed_mps,
                 region,
+                spray,
             } => Box::new(plaster::Plaster::new(plaster::PlasterSpec {
                 walls,
                 ceiling,
@@ -256,6 +257,7 @@ impl TaskSpec {
                 survey,
                 survey_speed_mps,
                 region,
+                spray,
             })),
             TaskSpec::WaitForOperator {
                 prompt,

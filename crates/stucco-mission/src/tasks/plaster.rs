@@ -15,9 +15,9 @@ use crate::manoeuvre::{self, Space};
 use crate::model::{DoorEstimate, Estimate, WallGeometry};
 use crate::plaster::{Cursor, Phase, PlasterCoverage, PlasterProgress, PlasterRun, plan_digest};
 use crate::route::{Floor, route};
-use crate::task::{Region, WallName};
+use crate::task::{Region, SpraySettings, WallName, spray_with};
 use stucco_core::{DriveCommand, Pose2, ToolCommand, VehicleSpec, wrap_angle};
-use stucco_plan::{OpeningKind, Plan, RoomModel, SurfaceId, WallOpening};
+use stucco_plan::{OpeningKind, Plan, RoomModel, SprayTool, SurfaceId, WallOpening};
 
 /// Spraying time between checkpoints within a stroke, s.
 const CHECKPOINT_SPRAY_S: f64 = 1.0;
@@ -56,6 +56,7 @@ pub(crate) struct PlasterSpec {
     pub survey: bool,
     pub survey_speed_mps: f64,
     pub region: Option<Region>,
+    pub spray: Option<SpraySettings>,
 }
 
 /// Plasters a room's walls and ceiling.
@@ -70,6 +71,12 @@ pub(crate) struct Plaster {
     /// The survey has looked again at the window edges it bracketed
     /// loosely.
     edges_looked_at: bool,
+    /// The spray tool and the coat this task plans with: the mission's
+    /// with the task's own settings over it.
+    tool: Option<SprayTool>,
+    /// Flow while spraying, when the task's is not the mission's tool's,
+    /// m³/s (the sprayer is told with each command).
+    flow_m3ps: Option<f64>,
 }
 
 impl Plaster {
@@ -80,6 +87,8 @@ impl Plaster {
             legs: None,
             run: None,
             edges_looked_at: false,
+            tool: None,
+            flow_m3ps: None,
         }
     }
 }
@@ -89,9 +98,20 @@ impl Task for Plaster {
         let (config, est, index) = (cx.config, cx.est, cx.index);
         let clearance = pivot_clearance(config);
         let s = &self.spec;
+        self.tool = match (&config.spray, &s.spray) {
+            (Some(base), Some(settings)) => Some(
+                spray_with(base, settings).map_err(|error| TaskFailure::SpraySettings { error })?,
+            ),
+            (base, _) => base.clone(),
+        };
+        self.flow_m3ps = match (&self.tool, &config.spray) {
+            (Some(t), Some(base)) if t.flow_l_per_min != base.flow_l_per_min => Some(t.flow_m3ps()),
+            _ => None,
+        };
         let resumed = thaw.as_ref().is_some_and(|t| t.progress.task == index);
         let mut run = plaster_run(
             config,
+            self.tool.as_ref(),
             thaw,
             index,
             (&s.walls, s.ceiling, s.region.as_ref()),
@@ -187,10 +207,11 @@ impl Task for Plaster {
                     }
                 }
                 // Every wall seen from its standoff: plan on what was found.
-                let plan = match plan_room(config, (walls, ceiling, region), est) {
-                    Ok(p) => p,
-                    Err(e) => return TaskStep::Failed(e),
-                };
+                let plan =
+                    match plan_room(config, self.tool.as_ref(), (walls, ceiling, region), est) {
+                        Ok(p) => p,
+                        Err(e) => return TaskStep::Failed(e),
+                    };
                 let Some(run) = self.run.as_mut() else {
                     return TaskStep::Failed(TaskFailure::NoPlan);
                 };
@@ -449,6 +470,7 @@ impl Task for Plaster {
                 if let Some(cmd) = run.command(t, est) {
                     cx.effects.tool = ToolCommand {
                         spray: cmd.spray && spray_ok,
+                        flow_m3ps: self.flow_m3ps,
                         ..cmd
                     };
                 }
@@ -566,6 +588,7 @@ impl Task for Plaster {
 /// (from its cursor), or a new one on the room as the robot knows it.
 fn plaster_run(
     config: &ExecutiveConfig,
+    tool: Option<&SprayTool>,
     thaw: &mut Option<Thaw>,
     index: usize,
     (walls, ceiling, region): (&[WallName], bool, Option<&Region>),
@@ -590,7 +613,7 @@ fn plaster_run(
         run.resume_s = p.in_move_s.max(0.0);
         return Ok(run);
     }
-    let plan = plan_room(config, (walls, ceiling, region), est)?;
+    let plan = plan_room(config, tool, (walls, ceiling, region), est)?;
     Ok(PlasterRun::new(plan, Cursor::default()))
 }
 
@@ -690,10 +713,11 @@ fn edge_looks(
 /// door the plan gives shut, or the camera's top where it saw higher.
 fn plan_room(
     config: &ExecutiveConfig,
+    tool: Option<&SprayTool>,
     (walls, ceiling, region): (&[WallName], bool, Option<&Region>),
     est: &Estimate,
 ) -> Result<Plan, TaskFailure> {
-    let (Some(tool), vehicle) = (config.spray.as_ref(), &config.vehicle) else {
+    let (Some(tool), vehicle) = (tool, &config.vehicle) else {
         return Err(TaskFailure::NoSprayTool);
     };
     let mut openings: Vec<WallOpening> = est
