@@ -84,7 +84,8 @@ fn a_robot_killed_while_plastering_finishes_the_job_when_resumed() {
 
 /// Asked to stop (SIGINT, as Ctrl-C sends; SIGTERM, as a service manager
 /// does), the robot ends at a period's end and leaves its report and last
-/// checkpoint.
+/// checkpoint; its recording (`--record`) replays through a fresh
+/// executive to the same commands.
 #[test]
 fn a_robot_asked_to_stop_leaves_its_report() {
     for signal in ["-INT", "-TERM"] {
@@ -93,7 +94,7 @@ fn a_robot_asked_to_stop_leaves_its_report() {
         let mut child = Command::new(env!("CARGO_BIN_EXE_stucco"))
             .arg("robot")
             .arg(mission())
-            .args(["--name", "asked", "--out"])
+            .args(["--name", "asked", "--record", "--out"])
             .arg(out)
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -108,6 +109,8 @@ fn a_robot_asked_to_stop_leaves_its_report() {
             "never started"
         );
         let rest = std::thread::spawn(move || log.count());
+        // Some periods of the mission, in real time.
+        std::thread::sleep(Duration::from_millis(500));
         let status = Command::new("kill")
             .arg(signal)
             .arg(child.id().to_string())
@@ -121,5 +124,15 @@ fn a_robot_asked_to_stop_leaves_its_report() {
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
                 .unwrap();
         assert_eq!(report["outcome"], "stopped", "{signal}: {report}");
+        let replay = Command::new(env!("CARGO_BIN_EXE_stucco"))
+            .arg("replay-run")
+            .arg(out.join("run.mcap"))
+            .arg("--json")
+            .output()
+            .unwrap();
+        assert!(replay.status.success(), "{signal}: {replay:?}");
+        let replay: serde_json::Value = serde_json::from_slice(&replay.stdout).unwrap();
+        assert!(replay["ticks"].as_u64().unwrap() > 5, "{signal}: {replay}");
+        assert_eq!(replay["identical"], replay["ticks"], "{signal}: {replay}");
     }
 }
