@@ -9,8 +9,7 @@
 //! (default `missions/wall-pass.toml`, `out/sim-job`).
 
 use anyhow::{Context, Result};
-use resvg::{tiny_skia, usvg};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use stucco_cli::{TaskMissionJob, run_task_mission};
 
 fn main() -> Result<()> {
@@ -49,34 +48,10 @@ fn main() -> Result<()> {
     for name in ["map", "coat-south"] {
         let svg = out.join(name).with_extension("svg");
         if svg.exists() {
-            png(&svg)?;
+            let text = std::fs::read_to_string(&svg).with_context(|| svg.display().to_string())?;
+            stucco_cli::rasterise(&text, &svg.with_extension("png"))?;
         }
     }
     println!("report, events, map: {}", out.display());
     Ok(())
-}
-
-/// The SVG at `path` drawn as a PNG beside it, with the system's fonts.
-fn png(path: &Path) -> Result<()> {
-    let text = std::fs::read_to_string(path).with_context(|| path.display().to_string())?;
-    let mut options = usvg::Options::default();
-    options.fontdb_mut().load_system_fonts();
-    if options
-        .fontdb_mut()
-        .faces()
-        .any(|f| f.families.iter().any(|(family, _)| family == "DejaVu Sans"))
-    {
-        options.fontdb_mut().set_sans_serif_family("DejaVu Sans");
-    }
-    let tree = usvg::Tree::from_str(&text, &options)
-        .with_context(|| format!("{}: not an SVG", path.display()))?;
-    let size = tree.size().to_int_size();
-    let mut pixmap = tiny_skia::Pixmap::new(size.width(), size.height())
-        .with_context(|| format!("{}: an empty picture", path.display()))?;
-    pixmap.fill(tiny_skia::Color::WHITE);
-    resvg::render(&tree, tiny_skia::Transform::default(), &mut pixmap.as_mut());
-    let out = path.with_extension("png");
-    pixmap
-        .save_png(&out)
-        .with_context(|| format!("writing {}", out.display()))
 }

@@ -64,6 +64,7 @@ pub use stucco_runtime::{
     write_atomic,
 };
 pub use study::{Axes, Axis, Compare, SettingReport, Study, StudyJob, StudyReport, run_study};
+pub use study_plot::rasterise;
 pub use task_mission::{
     DoorReport, MissionReport, MissionSummary, RoomChange, TaskMissionJob, TaskReport,
     run_task_mission,

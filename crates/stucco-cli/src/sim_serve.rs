@@ -115,7 +115,7 @@ pub fn serve(job: &ServeJob, stop: &AtomicBool) -> Result<ServeRun> {
         {
             break;
         }
-        server.answer(&info(&sim), || world_json(&sim))?;
+        server.answer(|| info(&sim), || world_json(&sim))?;
         let readings = if job.lockstep {
             let Some(cmd) = server.next_command(Duration::from_millis(50)) else {
                 continue;
@@ -167,7 +167,7 @@ pub fn serve(job: &ServeJob, stop: &AtomicBool) -> Result<ServeRun> {
 }
 
 /// The drive and tool commands and the period's length of `cmd`; one
-/// that is not finite, or a period not in (0, 1] s, is refused (logged,
+/// that is not finite, a negative flow, or a period not in (0, 1] s, is refused (logged,
 /// counted): the drive stops and the spray goes off (the nozzle held where
 /// `last_tool` put it) for a control period.
 fn checked(
@@ -178,8 +178,10 @@ fn checked(
     let finite = [cmd.drive.speed_mps, cmd.drive.steer_rad, cmd.dt_s]
         .into_iter()
         .chain(cmd.tool.nozzle_m)
+        .chain(cmd.tool.flow_m3ps)
         .all(f64::is_finite);
-    if finite && cmd.dt_s > 0.0 && cmd.dt_s <= 1.0 {
+    let flow_ok = cmd.tool.flow_m3ps.is_none_or(|f| f >= 0.0);
+    if finite && flow_ok && cmd.dt_s > 0.0 && cmd.dt_s <= 1.0 {
         return (cmd.drive, cmd.tool, cmd.dt_s);
     }
     *refused += 1;
@@ -188,4 +190,63 @@ fn checked(
         "a command not finite or with a period not in (0, 1] s refused: drive stopped, spray off"
     );
     (DriveCommand::STOP, last_tool.off(), DT_S)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use stucco_core::Aim;
+
+    fn command(speed_mps: f64, dt_s: f64, nozzle_z: f64) -> PlatformCommand {
+        PlatformCommand {
+            period: 3,
+            dt_s,
+            drive: DriveCommand {
+                speed_mps,
+                steer_rad: 0.1,
+            },
+            tool: ToolCommand {
+                nozzle_m: [0.5, 0.4, nozzle_z],
+                aim: Aim::Up,
+                spray: true,
+                ..ToolCommand::default()
+            },
+        }
+    }
+
+    #[test]
+    fn a_command_not_finite_or_out_of_range_stops_drive_and_spray() {
+        let last = ToolCommand {
+            nozzle_m: [0.3, 0.2, 1.0],
+            spray: true,
+            ..ToolCommand::default()
+        };
+        let mut refused = 0;
+        let good = command(0.3, 0.02, 1.2);
+        assert_eq!(
+            checked(&good, last, &mut refused),
+            (good.drive, good.tool, 0.02)
+        );
+        assert_eq!(refused, 0);
+        for bad in [
+            command(f64::NAN, 0.02, 1.2),
+            command(0.3, 0.0, 1.2),
+            command(0.3, 5.0, 1.2),
+            command(0.3, 0.02, f64::INFINITY),
+            PlatformCommand {
+                tool: ToolCommand {
+                    flow_m3ps: Some(-1e-4),
+                    ..good.tool
+                },
+                ..good
+            },
+        ] {
+            let (drive, tool, dt_s) = checked(&bad, last, &mut refused);
+            assert_eq!(drive, DriveCommand::STOP);
+            assert!(!tool.spray);
+            assert_eq!(tool.nozzle_m, last.nozzle_m, "the nozzle held");
+            assert_eq!(dt_s, DT_S);
+        }
+        assert_eq!(refused, 5);
+    }
 }

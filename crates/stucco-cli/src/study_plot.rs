@@ -149,7 +149,7 @@ fn panel(
 }
 
 /// `svg` rendered to a PNG at `path`, with the system's fonts.
-fn rasterise(svg: &str, path: &Path) -> Result<()> {
+pub fn rasterise(svg: &str, path: &Path) -> Result<()> {
     let mut options = usvg::Options::default();
     let fonts = options.fontdb_mut();
     fonts.load_system_fonts();

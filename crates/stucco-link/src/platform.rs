@@ -35,6 +35,7 @@ use stucco_core::{
 };
 use zenoh::Session;
 use zenoh::Wait;
+use zenoh::bytes::ZBytes;
 use zenoh::handlers::FifoChannelHandler;
 use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::qos::CongestionControl;
@@ -118,8 +119,8 @@ pub struct PlatformServer {
     info: Queryable<FifoChannelHandler<Query>>,
     world: Queryable<FifoChannelHandler<Query>>,
     /// The last readings published, sent again when their command comes
-    /// again.
-    last: Option<(u64, Vec<u8>)>,
+    /// again (shared bytes: keeping them copies nothing).
+    last: Option<(u64, ZBytes)>,
 }
 
 impl PlatformServer {
@@ -178,7 +179,7 @@ impl PlatformServer {
 
     /// Publishes one period's readings.
     pub fn publish(&mut self, readings: &PlatformReadings) -> Result<(), LinkError> {
-        let json = serde_json::to_vec(readings).map_err(z)?;
+        let json = ZBytes::from(serde_json::to_vec(readings).map_err(z)?);
         self.readings.put(json.clone()).wait().map_err(z)?;
         self.last = Some((readings.period, json));
         Ok(())
@@ -198,14 +199,14 @@ impl PlatformServer {
     }
 
     /// Answers the queries that came: `info` for the platform's info,
-    /// `world` (called only when asked) for its world's state as JSON.
+    /// `world` for its world's state as JSON, each called only when asked.
     pub fn answer(
         &mut self,
-        info: &PlatformInfo,
+        info: impl Fn() -> PlatformInfo,
         world: impl FnOnce() -> Result<Vec<u8>, String>,
     ) -> Result<(), LinkError> {
         while let Ok(Some(q)) = self.info.try_recv() {
-            let json = serde_json::to_vec(info).map_err(z)?;
+            let json = serde_json::to_vec(&info()).map_err(z)?;
             q.reply(q.key_expr().clone(), json).wait().map_err(z)?;
         }
         let mut world = Some(world);

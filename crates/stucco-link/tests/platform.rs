@@ -15,6 +15,7 @@ use stucco_core::{
 };
 use stucco_link::platform::{PlatformInfo, PlatformReadings};
 use stucco_link::{LinkConfig, PlatformServer, Session, ZenohPlatform, open};
+use zenoh::Wait;
 
 fn pair(dir: &std::path::Path) -> (Session, Session) {
     let endpoint = format!("unixsock-stream/{}", dir.join("z.sock").display());
@@ -54,14 +55,14 @@ impl Body {
             let mut last = None;
             let mut lost = false;
             while !s.load(Ordering::Relaxed) {
-                let info = PlatformInfo {
+                let info = || PlatformInfo {
                     name: "b1".into(),
                     spec: RobotSpec::default(),
                     now,
                     lockstep: true,
                     period_s: 0.02,
                 };
-                server.answer(&info, || Err("no world".into())).unwrap();
+                server.answer(info, || Err("no world".into())).unwrap();
                 let Some(cmd) = server.next_command(Duration::from_millis(20)) else {
                     continue;
                 };
@@ -121,14 +122,14 @@ impl Body {
             let mut now = Stamp::ZERO;
             let mut k = 0;
             while !s.load(Ordering::Relaxed) {
-                let info = PlatformInfo {
+                let info = || PlatformInfo {
                     name: "b1".into(),
                     spec: RobotSpec::default(),
                     now,
                     lockstep: false,
                     period_s,
                 };
-                server.answer(&info, || Err("no world".into())).unwrap();
+                server.answer(info, || Err("no world".into())).unwrap();
                 let _ = server.take_commands();
                 k += 1;
                 now = now.offset_secs(period_s);
@@ -237,4 +238,64 @@ fn a_platform_gone_fails_the_period_naming_it() {
         .err()
         .expect("no platform");
     assert!(e.to_string().contains("nobody"), "{e}");
+}
+
+#[test]
+fn malformed_messages_are_refused_naming_the_key_and_where() {
+    let dir = tempfile::tempdir().unwrap();
+    let (body, brain) = pair(dir.path());
+    let mut server = PlatformServer::new(&body, "b1").unwrap();
+    // A command that is not one is skipped; the next good one is taken.
+    let commands = brain
+        .declare_publisher(stucco_link::platform::keys::command("b1"))
+        .wait()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    commands
+        .put("{\"period\": 1, \"dt_s\": \"soon\"}")
+        .wait()
+        .unwrap();
+    let good = stucco_link::platform::PlatformCommand {
+        period: 2,
+        dt_s: 0.02,
+        drive: DriveCommand::STOP,
+        tool: ToolCommand::default(),
+    };
+    commands
+        .put(serde_json::to_vec(&good).unwrap())
+        .wait()
+        .unwrap();
+    assert_eq!(server.next_command(Duration::from_secs(5)), Some(good));
+    // Readings that are not readings fail the brain's period, naming the
+    // key and the place in the message.
+    let stop = Arc::new(AtomicBool::new(false));
+    let s = stop.clone();
+    let liar = std::thread::spawn(move || {
+        let readings = body
+            .declare_publisher(stucco_link::platform::keys::readings("b1"))
+            .wait()
+            .unwrap();
+        while !s.load(Ordering::Relaxed) {
+            let info = || PlatformInfo {
+                name: "b1".into(),
+                spec: RobotSpec::default(),
+                now: Stamp::ZERO,
+                lockstep: true,
+                period_s: 0.02,
+            };
+            server.answer(info, || Err("no world".into())).unwrap();
+            if server.next_command(Duration::from_millis(20)).is_some() {
+                readings
+                    .put("{\"period\": 1,\n \"now\": -}")
+                    .wait()
+                    .unwrap();
+            }
+        }
+    });
+    let mut p = ZenohPlatform::connect(&brain, "b1", Duration::from_secs(10)).unwrap();
+    let e = p.advance(0.02).unwrap_err().to_string();
+    stop.store(true, Ordering::Relaxed);
+    liar.join().unwrap();
+    assert!(e.contains("stucco/b1/platform/readings"), "{e}");
+    assert!(e.contains("line 2"), "{e}");
 }
