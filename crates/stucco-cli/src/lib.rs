@@ -54,7 +54,7 @@ pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{PlatformKind, RobotJob, RobotRun, run_robot};
 pub use sim_robot::{
     LawDriven, Served, SimRobot, Simulated, WorldKeeper, load_world, mission_sim_config,
-    mission_simulator, robot_on, robot_spec, sim_robot,
+    mission_simulator, robot_on, robot_spec,
 };
 pub use sim_serve::{ServeJob, ServeRun, serve};
 pub use simbench::{SimbenchJob, SimbenchReport, run_simbench};

@@ -16,7 +16,7 @@ use stucco_mission::{Executive, ExecutiveConfig, SafetyConfig};
 use stucco_mission::{Inputs, Outputs};
 use stucco_nav::RoomState;
 use stucco_runtime::{BadInput, Mission, Perception, Robot, Sink, SinkError};
-use stucco_sim::{SimConfig, Simulator, SprayerSpec, WorldSpec};
+use stucco_sim::{SimConfig, Simulator, WorldSpec};
 
 /// A robot of the runtime on the simulator.
 pub type SimRobot = Robot<Simulator>;
@@ -167,32 +167,6 @@ pub fn robot_on<P: Platform>(
     ))
 }
 
-/// The robot of `world` with `seed`, carrying `sprayer`, its filter
-/// starting at `x0` (room frame) with `size_sigma_m` on the room's size,
-/// carrying out `executive` (built for the simulated robot:
-/// [`robot_spec`]).
-pub fn sim_robot(
-    world: &WorldSpec,
-    seed: u64,
-    x0: RoomState,
-    size_sigma_m: [f64; 2],
-    sprayer: Option<SprayerSpec>,
-    executive: Executive,
-) -> Result<SimRobot> {
-    let cfg = SimConfig {
-        sprayer,
-        ..SimConfig::default()
-    };
-    let spec = cfg.robot();
-    robot_on(
-        Simulator::new(world, cfg, Some(seed)),
-        &spec,
-        x0,
-        size_sigma_m,
-        executive,
-    )
-}
-
 /// The simulated robot as its software knows it.
 pub fn robot_spec() -> stucco_core::RobotSpec {
     SimConfig::default().robot()
@@ -228,7 +202,13 @@ impl LawDriven {
             Vec::new(),
         );
         Ok(LawDriven {
-            robot: sim_robot(world, seed, x0, size_sigma_m, None, idle)?,
+            robot: robot_on(
+                Simulator::new(world, SimConfig::default(), Some(seed)),
+                &spec,
+                x0,
+                size_sigma_m,
+                idle,
+            )?,
         })
     }
 
