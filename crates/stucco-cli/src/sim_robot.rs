@@ -42,8 +42,13 @@ pub trait Simulated: Platform {
     fn restore(&mut self, state: &WorldState);
 
     /// `f` on a simulator carrying the world's plaster now: this one, or
-    /// one rebuilt from a served world's state.
-    fn with_plaster<R>(&self, f: impl FnOnce(&Simulator) -> Result<R>) -> Result<R>;
+    /// one rebuilt from a served world's state (`known`, when it has just
+    /// been read; else read now).
+    fn with_plaster<R>(
+        &self,
+        known: Option<&WorldState>,
+        f: impl FnOnce(&Simulator) -> Result<R>,
+    ) -> Result<R>;
 }
 
 impl Simulated for Simulator {
@@ -61,7 +66,11 @@ impl Simulated for Simulator {
         state.restore(self);
     }
 
-    fn with_plaster<R>(&self, f: impl FnOnce(&Simulator) -> Result<R>) -> Result<R> {
+    fn with_plaster<R>(
+        &self,
+        _known: Option<&WorldState>,
+        f: impl FnOnce(&Simulator) -> Result<R>,
+    ) -> Result<R> {
         f(self)
     }
 }
@@ -126,9 +135,16 @@ impl Simulated for Served {
 
     fn restore(&mut self, _state: &WorldState) {}
 
-    fn with_plaster<R>(&self, f: impl FnOnce(&Simulator) -> Result<R>) -> Result<R> {
+    fn with_plaster<R>(
+        &self,
+        known: Option<&WorldState>,
+        f: impl FnOnce(&Simulator) -> Result<R>,
+    ) -> Result<R> {
         let mut sim = Simulator::new(&self.world, self.config.clone(), None);
-        self.world_state()?.restore(&mut sim);
+        match known {
+            Some(w) => w.restore(&mut sim),
+            None => self.world_state()?.restore(&mut sim),
+        }
         f(&sim)
     }
 }

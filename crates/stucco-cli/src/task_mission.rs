@@ -849,12 +849,16 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         if let Some(c) = checkpoints.as_mut() {
             c.save(&robot).map_err(sunk)?;
         }
-        if let Some(dir) = out {
-            robot
-                .platform()
-                .world_state()?
-                .save(&dir.join(WORLD_FILE))?;
-        }
+        // The world as the job leaves it, read once (a served simulator's
+        // over the link): kept beside the checkpoint, and scored.
+        let world = match out {
+            Some(dir) => {
+                let world = robot.platform().world_state()?;
+                world.save(&dir.join(WORLD_FILE))?;
+                Some(world)
+            }
+            None => None,
+        };
         let exec = robot.executive();
         let est = robot.perception().mission_estimate();
         let over = matches!(ending, Ending::Over);
@@ -922,7 +926,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         let scored = if plans.is_empty() {
             None
         } else {
-            Some(robot.platform().with_plaster(|sim| {
+            Some(robot.platform().with_plaster(world.as_ref(), |sim| {
                 if let Some(dir) = out {
                     for (frame, plan, _) in plans.values() {
                         let prefix = if plans.len() > 1 {
