@@ -4,7 +4,8 @@
 
 use std::time::Duration;
 use stucco_cli::{LinkConfig, Operator};
-use stucco_core::{Command, Reply, Side, SurfaceName, WallName};
+use stucco_core::telemetry::EventKind;
+use stucco_core::{Command, Reply, Side, SurfaceId, WallName};
 
 /// Robot `r1` standing by on a Unix socket in `dir`, and the link
 /// configuration of a peer connecting to it.
@@ -288,7 +289,7 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
         },
         Command::MapRoom,
         Command::PlasterSurface {
-            surface: SurfaceName::Ceiling,
+            surface: SurfaceId::Ceiling,
             region: None,
         },
         Command::GoToRoom {
@@ -315,13 +316,10 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     drop(relay);
     robot.stop();
     let mut kinds: Vec<String> = Vec::new();
-    for v in events.drain() {
-        kinds.push(v["event"].as_str().unwrap_or_default().to_owned());
-        if v["event"] == "task_started" {
-            kinds.push(format!(
-                "started {}",
-                v["name"].as_str().unwrap_or_default()
-            ));
+    for e in events.drain() {
+        kinds.push(e.kind.name().to_owned());
+        if let EventKind::TaskStarted { name, .. } = &e.kind {
+            kinds.push(format!("started {name}"));
         }
     }
     let count = |k: &str| kinds.iter().filter(|x| *x == k).count();
@@ -391,7 +389,7 @@ fn an_operator_sends_the_robot_from_room_to_room() {
         assert_eq!(r.last.map(|a| a.reply), Some(Reply::Done), "{room}");
         std::thread::sleep(Duration::from_millis(300));
         let last = states.drain().pop().unwrap();
-        assert_eq!(last["room"], room, "{last}");
+        assert_eq!(last.room.as_deref(), Some(room), "{last:?}");
     }
     robot.stop();
 }
@@ -429,8 +427,8 @@ fn a_jog_stops_at_its_time_to_live_when_the_operator_is_gone() {
     // The robot's own clock: the last period it drove, after the jog began.
     let driving: Vec<i64> = seen
         .iter()
-        .filter(|s| s["drive"]["speed_mps"].as_f64().is_some_and(|v| v > 0.0))
-        .filter_map(|s| s["stamp"].as_i64())
+        .filter(|s| s.drive.speed_mps > 0.0)
+        .map(|s| s.stamp.as_nanos())
         .collect();
     assert!(!driving.is_empty(), "the jog never drove");
     let last = stucco_core::Stamp::from_nanos(*driving.iter().max().unwrap());
@@ -441,8 +439,5 @@ fn a_jog_stops_at_its_time_to_live_when_the_operator_is_gone() {
         "drove {after_ttl:.3} s past the time to live"
     );
     // And nothing drove later.
-    assert!(
-        seen.iter()
-            .any(|s| s["stamp"].as_i64().is_some_and(|t| t > last.as_nanos()))
-    );
+    assert!(seen.iter().any(|s| s.stamp > last));
 }

@@ -45,7 +45,7 @@ pub use log_replay::{
     Reference, run_log_replay,
 };
 pub use logging::init_logging;
-pub use op::{BenchReport, CommandResult, EventFeed, Operator};
+pub use op::{BenchReport, CommandResult, Feed, Operator};
 pub use plastering::{
     PlasterReport, PredictedScores, RoomPlaster, WORLD_FILE, WorldState, sprayer_of,
     time_lower_bound,

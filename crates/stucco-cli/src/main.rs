@@ -15,7 +15,7 @@ use stucco_cli::{
 };
 use stucco_cli::{LinkConfig, Operator, PlatformKind, RobotJob, ServeJob, run_robot, serve};
 use stucco_cli::{LogReplayJob, OdomNoise, OdometrySource, Reference, run_log_replay};
-use stucco_core::{Command as Tc, Reply, Side, SurfaceName, WallName};
+use stucco_core::{Command as Tc, Reply, Side, SurfaceId, WallName};
 use stucco_link::Mode;
 
 /// stucco: software of an autonomous spray-plastering robot.
@@ -330,7 +330,7 @@ enum OpAction {
     Plaster {
         /// The surface: west, south, east, north (walls) or ceiling.
         #[arg(long, value_parser = parse_surface)]
-        surface: SurfaceName,
+        surface: SurfaceId,
         /// Only a part of the wall: FROM,TO along it and BOTTOM,TOP above
         /// the floor, m (e.g. `--region 1.0,2.5,0.0,1.2`).
         #[arg(long, value_parser = parse_region)]
@@ -428,11 +428,11 @@ enum OpAction {
     },
 }
 
-fn parse_surface(s: &str) -> Result<SurfaceName, String> {
+fn parse_surface(s: &str) -> Result<SurfaceId, String> {
     match s {
-        "ceiling" => Ok(SurfaceName::Ceiling),
+        "ceiling" => Ok(SurfaceId::Ceiling),
         wall => parse_wall(wall)
-            .map(SurfaceName::Wall)
+            .map(SurfaceId::Wall)
             .map_err(|_| format!("{s}: one of west, south, east, north, ceiling")),
     }
 }

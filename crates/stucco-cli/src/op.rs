@@ -5,10 +5,9 @@
 use anyhow::{Result, anyhow};
 use serde::Serialize;
 use std::time::{Duration, Instant};
-use stucco_core::{Ack, Command, Reply, RobotState, Stamp, Telecommand};
+use stucco_core::telemetry::{Estimate, Event, PlasterCoverage};
+use stucco_core::{Ack, Command, Reply, RobotState, Stamp, SurfaceId, Telecommand};
 use stucco_link::{LinkConfig, OperatorClient, ScanFrame, keys, parse};
-use stucco_mission::{Estimate, PlasterCoverage};
-use stucco_plan::SurfaceId;
 
 /// Retry period of an unanswered command.
 const RETRY: Duration = Duration::from_millis(500);
@@ -157,13 +156,13 @@ impl Operator {
     }
 
     /// `robot`'s events from now on; `drain` gives those that came.
-    pub fn events(&self, robot: &str) -> Result<EventFeed> {
-        Ok(EventFeed(self.client.watch(keys::events(robot))?))
+    pub fn events(&self, robot: &str) -> Result<Feed<Event>> {
+        Ok(Feed::new(self.client.watch(keys::events(robot))?))
     }
 
     /// `robot`'s states from now on.
-    pub fn states(&self, robot: &str) -> Result<EventFeed> {
-        Ok(EventFeed(self.client.watch(keys::state(robot))?))
+    pub fn states(&self, robot: &str) -> Result<Feed<RobotState>> {
+        Ok(Feed::new(self.client.watch(keys::state(robot))?))
     }
 
     /// One heartbeat to `robot`: the link is up while they come.
@@ -234,24 +233,28 @@ impl Operator {
                     }
                 }
             }
-            for (topic, sub) in [("event", &events), ("reply", &acks)] {
-                while let Ok(Some(s)) = sub.try_recv() {
-                    if let Ok(v) = parse::<serde_json::Value>(&s) {
-                        let line = tagged_line(topic, &v);
-                        emit(topic, v, Some(line));
-                    }
+            while let Ok(Some(s)) = events.try_recv() {
+                match parse::<Event>(&s) {
+                    Ok(e) => emit("event", json_of(&e), Some(event_line(&e))),
+                    Err(e) => emit("event", serde_json::Value::Null, Some(unread("event", &e))),
+                }
+            }
+            while let Ok(Some(s)) = acks.try_recv() {
+                match parse::<Ack>(&s) {
+                    Ok(a) => emit("reply", json_of(&a), Some(reply_line(&a))),
+                    Err(e) => emit("reply", serde_json::Value::Null, Some(unread("reply", &e))),
                 }
             }
             while let Ok(Some(s)) = map.try_recv() {
-                if let Ok(v) = parse::<serde_json::Value>(&s) {
-                    let line = view.map_line(&v);
-                    emit("map", v, line);
+                if let Ok(m) = parse::<Estimate>(&s) {
+                    let line = view.map_line(&m);
+                    emit("map", json_of(&m), line);
                 }
             }
             while let Ok(Some(s)) = coverage.try_recv() {
-                if let Ok(v) = parse::<serde_json::Value>(&s) {
-                    let line = view.coverage_line(&v);
-                    emit("coverage", v, line);
+                if let Ok(c) = parse::<PlasterCoverage>(&s) {
+                    let line = view.coverage_line(&c);
+                    emit("coverage", json_of(&c), line);
                 }
             }
             let mut latest = None;
@@ -260,11 +263,10 @@ impl Operator {
             }
             if let Some(s) = latest
                 && (json || shown.elapsed() >= Duration::from_secs(1))
-                && let (Ok(v), Ok(state)) =
-                    (parse::<serde_json::Value>(&s), parse::<RobotState>(&s))
+                && let Ok(state) = parse::<RobotState>(&s)
             {
                 let line = view.state_line(&state);
-                emit("state", v, Some(line));
+                emit("state", json_of(&state), Some(line));
                 shown = Instant::now();
             }
             if idle {
@@ -285,13 +287,6 @@ struct WatchView {
     coverage: String,
 }
 
-/// Seconds of a stamp in a message.
-fn secs(v: &serde_json::Value) -> f64 {
-    v["stamp"].as_i64().unwrap_or(0) as f64 * 1e-9
-}
-
-/// A JSON value in a few words: a string as it is, an object by its tag
-/// (or its only key), anything else compact.
 /// Text a robot sent, made safe for a terminal: control characters
 /// escaped (none can forge a line or move the cursor), at most
 /// [`PRINTED_CHARS`] characters.
@@ -317,50 +312,69 @@ fn printable(text: &str) -> String {
 /// The most characters of one field a line shows.
 const PRINTED_CHARS: usize = 120;
 
-fn short(v: &serde_json::Value) -> String {
-    match v {
-        serde_json::Value::String(s) => s.clone(),
-        serde_json::Value::Object(m) => {
-            let tag = ["state", "event", "behaviour", "kind", "reply"]
-                .iter()
-                .find_map(|k| m.get(*k).and_then(|t| t.as_str()));
-            match (tag, m.len()) {
-                (Some(t), _) => t.to_owned(),
-                (None, 1) => m.keys().next().cloned().unwrap_or_default(),
-                _ => v.to_string(),
-            }
-        }
-        serde_json::Value::Null => "-".to_owned(),
-        _ => v.to_string(),
-    }
+/// A message as JSON, for `watch --json`.
+fn json_of(message: &impl Serialize) -> serde_json::Value {
+    serde_json::to_value(message).unwrap_or(serde_json::Value::Null)
 }
 
-/// An event or a reply: when, what, and its other fields (a reply's
-/// reason among them).
-fn tagged_line(topic: &str, v: &serde_json::Value) -> String {
-    let mut rest = v.clone();
-    let what = match rest.as_object_mut() {
+/// A message's fields but its stamp and tag, compact and safe to print.
+fn fields(message: &impl Serialize, tag: &str) -> String {
+    let mut v = json_of(message);
+    match v.as_object_mut() {
         Some(m) => {
             m.remove("stamp");
-            if let Some(tag) = m.remove("event") {
-                short(&tag)
-            } else if let Some(serde_json::Value::Object(mut reply)) = m.remove("reply") {
-                let tag = reply.remove("reply").map(|t| short(&t)).unwrap_or_default();
-                m.extend(reply);
-                tag
-            } else {
-                String::new()
+            m.remove(tag);
+            if m.is_empty() {
+                return String::new();
             }
         }
-        None => String::new(),
+        None => return String::new(),
+    }
+    printable(&v.to_string())
+}
+
+/// An event: when, its kind, and its other fields.
+fn event_line(e: &Event) -> String {
+    format!(
+        "{:>9.1} s  event  {} {}",
+        e.stamp.as_secs_f64(),
+        e.kind.name(),
+        fields(e, "event")
+    )
+    .trim_end()
+    .to_owned()
+}
+
+/// A reply: when, to which command, what, and why.
+fn reply_line(a: &Ack) -> String {
+    let (what, why) = match &a.reply {
+        Reply::Accepted => ("accepted", String::new()),
+        Reply::Done => ("done", String::new()),
+        Reply::Rejected { reason } => ("rejected", printable(reason)),
+        Reply::Failed { reason, code } => (
+            "failed",
+            match code {
+                Some(code) => format!("[{}] {}", printable(code), printable(reason)),
+                None => printable(reason),
+            },
+        ),
     };
-    let rest = match rest.as_object() {
-        Some(m) if m.is_empty() => String::new(),
-        _ => rest.to_string(),
-    };
-    format!("{:>9.1} s  {topic:<6} {what} {rest}", secs(v))
-        .trim_end()
-        .to_owned()
+    format!(
+        "{:>9.1} s  reply  {what} {} {why}",
+        a.stamp.as_secs_f64(),
+        printable(&a.id)
+    )
+    .trim_end()
+    .to_owned()
+}
+
+/// A message this `op` could not read (a newer robot's, or a broken one).
+fn unread(topic: &str, e: &impl std::fmt::Display) -> String {
+    format!(
+        "{:>11}  {topic:<6} not read: {}",
+        "",
+        printable(&e.to_string())
+    )
 }
 
 impl WatchView {
@@ -398,8 +412,7 @@ impl WatchView {
     }
 
     /// The map in one line, when it differs from the last one shown.
-    fn map_line(&mut self, v: &serde_json::Value) -> Option<String> {
-        let map: Estimate = serde_json::from_value(v.clone()).ok()?;
+    fn map_line(&mut self, map: &Estimate) -> Option<String> {
         let line = format!(
             "map    room {:.2} × {:.2} m, {:.2} m high · doors {} · windows {} · on the floor {}",
             map.room_m[0],
@@ -417,14 +430,13 @@ impl WatchView {
     }
 
     /// The coverage in one line, when it differs from the last one shown.
-    fn coverage_line(&mut self, v: &serde_json::Value) -> Option<String> {
-        let c: PlasterCoverage = serde_json::from_value(v.clone()).ok()?;
+    fn coverage_line(&mut self, c: &PlasterCoverage) -> Option<String> {
         let surfaces: Vec<String> = c
             .surfaces
             .iter()
             .map(|s| {
                 let name = match s.surface {
-                    SurfaceId::Wall(w) => format!("wall {}", short(&serde_json::json!(w))),
+                    SurfaceId::Wall(_) => format!("wall {}", s.surface.name()),
                     SurfaceId::Ceiling => "ceiling".to_owned(),
                 };
                 let mut part = if s.planned_spray_s > 0.0 {
@@ -451,15 +463,26 @@ impl WatchView {
     }
 }
 
-/// A robot's events (or states) as they come.
-pub struct EventFeed(stucco_link::Subscription);
+/// A robot's messages of one kind (its events, its states) as they come.
+pub struct Feed<T> {
+    subscription: stucco_link::Subscription,
+    kind: std::marker::PhantomData<fn() -> T>,
+}
 
-impl EventFeed {
-    /// The messages that came since the last call, as JSON.
-    pub fn drain(&self) -> Vec<serde_json::Value> {
+impl<T: serde::de::DeserializeOwned> Feed<T> {
+    fn new(subscription: stucco_link::Subscription) -> Self {
+        Feed {
+            subscription,
+            kind: std::marker::PhantomData,
+        }
+    }
+
+    /// The messages that came since the last call (any that do not read
+    /// as a `T` are left out).
+    pub fn drain(&self) -> Vec<T> {
         let mut out = Vec::new();
-        while let Ok(Some(s)) = self.0.try_recv() {
-            if let Ok(v) = parse::<serde_json::Value>(&s) {
+        while let Ok(Some(s)) = self.subscription.try_recv() {
+            if let Ok(v) = parse::<T>(&s) {
                 out.push(v);
             }
         }
@@ -471,7 +494,8 @@ impl EventFeed {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use stucco_mission::{SurfaceCoverage, WallName};
+    use stucco_core::WallName;
+    use stucco_core::telemetry::{EventKind, SurfaceCoverage, TaskFailure};
 
     #[test]
     fn text_from_a_robot_cannot_forge_a_line() {
@@ -505,17 +529,15 @@ mod tests {
             ],
         };
         let mut view = WatchView::default();
-        let v = serde_json::to_value(&c).unwrap();
         assert_eq!(
-            view.coverage_line(&v).as_deref(),
+            view.coverage_line(&c).as_deref(),
             Some(
                 "coverage  station 3/14 · wall south 25% · ceiling nothing planned (0.40 m² out of reach)"
             )
         );
-        assert_eq!(view.coverage_line(&v), None);
+        assert_eq!(view.coverage_line(&c), None);
         c.surfaces[0].done_spray_s = 60.0;
-        let v = serde_json::to_value(&c).unwrap();
-        assert!(view.coverage_line(&v).unwrap().contains("wall south 30%"));
+        assert!(view.coverage_line(&c).unwrap().contains("wall south 30%"));
     }
 
     #[test]
@@ -527,9 +549,29 @@ mod tests {
                 reason: "door 7 is not known (1 found)".to_owned(),
             },
         };
-        let line = tagged_line("reply", &serde_json::to_value(&ack).unwrap());
-        assert!(line.contains("reply  rejected"), "{line}");
-        assert!(line.contains("door 7 is not known"), "{line}");
-        assert!(line.contains("\"id\":\"c1\""), "{line}");
+        let line = reply_line(&ack);
+        assert_eq!(
+            line,
+            "     12.5 s  reply  rejected c1 door 7 is not known (1 found)"
+        );
+    }
+
+    #[test]
+    fn an_event_reads_with_its_kind_and_fields() {
+        let e = Event {
+            stamp: Stamp::from_secs_f64(3.0),
+            kind: EventKind::TaskFailed {
+                task: 2,
+                reason: "map_room: no clear way\nreaches".to_owned(),
+                failure: TaskFailure::NoWayToCorners,
+            },
+        };
+        let line = event_line(&e);
+        assert!(
+            line.starts_with("      3.0 s  event  task_failed {"),
+            "{line}"
+        );
+        assert!(line.contains("\"code\":\"no_way_to_corners\""), "{line}");
+        assert!(!line.chars().any(char::is_control), "{line}");
     }
 }

@@ -36,13 +36,13 @@ mod robot;
 mod scan;
 mod spray;
 mod stamp;
-mod telemetry;
+pub mod telemetry;
 mod text;
 mod vehicle;
 
 pub use laser::{BeamWidth, LaserSpec};
 pub use operator::{
-    Ack, Command, Landmark, Region, Reply, Side, SurfaceName, Telecommand, WallName,
+    Ack, Command, Landmark, OperatorCommand, Region, Reply, Side, SurfaceId, Telecommand, WallName,
 };
 pub use platform::{DriveCommand, EncoderSample, Platform, PlatformError, RangeProfile, Readings};
 pub use pose::{Pose2, Twist2, wrap_angle};
@@ -53,7 +53,7 @@ pub use spray::{
     path_density,
 };
 pub use stamp::{ParseStampError, Stamp};
-pub use telemetry::{BehaviourKind, Hazard, MissionMode, PivotPhase, RobotState};
+pub use telemetry::{BehaviourKind, Hazard, MissionMode, Obstacle, PivotPhase, RobotState};
 pub use text::{NonFinite, first_non_finite, line_column};
 pub use vehicle::VehicleSpec;
 

@@ -155,7 +155,7 @@ pub enum Command {
     /// spray tool and settings).
     PlasterSurface {
         /// The surface, as `map` and `coverage` name it.
-        surface: SurfaceName,
+        surface: SurfaceId,
         /// Only this part of it (a wall's), when given.
         #[serde(default)]
         region: Option<Region>,
@@ -193,13 +193,52 @@ pub struct Region {
 
 /// A surface of a room: a wall or the ceiling (`{"wall": "south"}`,
 /// `"ceiling"`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum SurfaceName {
+pub enum SurfaceId {
     /// A wall.
     Wall(WallName),
     /// The ceiling.
     Ceiling,
+}
+
+impl SurfaceId {
+    /// The five surfaces of a rectangular room.
+    pub const ALL: [SurfaceId; 5] = [
+        SurfaceId::Wall(WallName::West),
+        SurfaceId::Wall(WallName::South),
+        SurfaceId::Wall(WallName::East),
+        SurfaceId::Wall(WallName::North),
+        SurfaceId::Ceiling,
+    ];
+
+    /// A short name for reports and file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            SurfaceId::Wall(WallName::West) => "west",
+            SurfaceId::Wall(WallName::South) => "south",
+            SurfaceId::Wall(WallName::East) => "east",
+            SurfaceId::Wall(WallName::North) => "north",
+            SurfaceId::Ceiling => "ceiling",
+        }
+    }
+}
+
+/// What the operator (or a script standing in for one) asks of the
+/// executive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OperatorCommand {
+    /// Stop where you are and wait.
+    Pause,
+    /// Go on after a pause or a released e-stop.
+    Resume,
+    /// Give the mission up.
+    Abort,
+    /// Give the current task up and go on with the next.
+    Skip,
+    /// The answer a `wait_for_operator` task waits for.
+    Continue,
 }
 
 /// The robot's reply to a telecommand.
@@ -266,14 +305,14 @@ mod tests {
         assert_eq!(
             read(r#"{"wall": "south"}"#).unwrap(),
             Command::PlasterSurface {
-                surface: SurfaceName::Wall(WallName::South),
+                surface: SurfaceId::Wall(WallName::South),
                 region: None,
             }
         );
         assert_eq!(
             read(r#""ceiling""#).unwrap(),
             Command::PlasterSurface {
-                surface: SurfaceName::Ceiling,
+                surface: SurfaceId::Ceiling,
                 region: None,
             }
         );
@@ -298,7 +337,7 @@ mod tests {
         assert_eq!(
             plaster(r#"{"along_m": [1.0, 2.5], "height_m": [0.0, 1.2]}"#).unwrap(),
             Command::PlasterSurface {
-                surface: SurfaceName::Wall(WallName::South),
+                surface: SurfaceId::Wall(WallName::South),
                 region: Some(Region {
                     along_m: [1.0, 2.5],
                     height_m: [0.0, 1.2],

@@ -3,7 +3,6 @@
 //! layer.
 
 use crate::behaviour::BehaviourKind;
-pub use crate::event::{Event, EventKind};
 use crate::floor::FloorPlan;
 use crate::model::Estimate;
 use crate::plaster::{Cursor, PlasterCoverage, PlasterProgress};
@@ -15,6 +14,8 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use stucco_control::GainSchedule;
 pub use stucco_core::MissionMode;
+pub use stucco_core::OperatorCommand;
+pub use stucco_core::telemetry::{Event, EventKind};
 use stucco_core::{
     Ack, Command, DriveCommand, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec,
 };
@@ -23,23 +24,6 @@ use stucco_plan::{Plan, SprayTool};
 /// Where the nozzle waits while the robot drives, robot frame, m: over
 /// the body.
 pub const PARK_NOZZLE_M: [f64; 3] = [0.3, 0.0, 1.2];
-
-/// What the operator (or a script standing in for one) asks of the
-/// executive.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum OperatorCommand {
-    /// Stop where you are and wait.
-    Pause,
-    /// Go on after a pause or a released e-stop.
-    Resume,
-    /// Give the mission up.
-    Abort,
-    /// Give the current task up and go on with the next.
-    Skip,
-    /// The answer a `wait_for_operator` task waits for.
-    Continue,
-}
 
 /// A task's state.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -35,7 +35,6 @@
 
 mod behaviour;
 mod checkpoint;
-mod event;
 mod executive;
 mod file;
 mod floor;

@@ -326,10 +326,10 @@ impl TaskSpec {
             },
             C::PlasterSurface { surface, region } => TaskSpec::Plaster {
                 walls: match surface {
-                    stucco_core::SurfaceName::Wall(w) => vec![*w],
-                    stucco_core::SurfaceName::Ceiling => Vec::new(),
+                    stucco_core::SurfaceId::Wall(w) => vec![*w],
+                    stucco_core::SurfaceId::Ceiling => Vec::new(),
                 },
-                ceiling: *surface == stucco_core::SurfaceName::Ceiling,
+                ceiling: *surface == stucco_core::SurfaceId::Ceiling,
                 speed_mps: follow_speed(),
                 settle_s: settle(),
                 survey: true,

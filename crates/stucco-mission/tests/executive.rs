@@ -8,11 +8,11 @@ use nalgebra::Point2;
 use std::collections::BTreeMap;
 use stucco_control::{GainSchedule, Limiter};
 use stucco_core::{
-    Ack, Command, DriveCommand, Pose2, Reply, Stamp, SurfaceName, Telecommand, Twist2, VehicleSpec,
+    Ack, Command, DriveCommand, Pose2, Reply, Stamp, SurfaceId, Telecommand, Twist2, VehicleSpec,
     wrap_angle,
 };
 use stucco_mission::*;
-use stucco_plan::{Rect, SurfaceId};
+use stucco_plan::Rect;
 
 const DT: f64 = 0.02;
 const ROOM: [f64; 2] = [5.0, 3.0];
@@ -718,7 +718,7 @@ fn a_task_from_the_operator_is_accepted_then_done() {
 #[test]
 fn the_operator_has_one_surface_plastered() {
     let south = Command::PlasterSurface {
-        surface: SurfaceName::Wall(WallName::South),
+        surface: SurfaceId::Wall(WallName::South),
         region: None,
     };
     let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
@@ -1740,7 +1740,7 @@ fn the_operator_has_a_region_of_a_wall_plastered() {
     );
     tick_with(&mut exec, &mut robot, &[]);
     let ceiling = Command::PlasterSurface {
-        surface: SurfaceName::Ceiling,
+        surface: SurfaceId::Ceiling,
         region: Some(region),
     };
     let c = command("c", robot.now, ceiling);
@@ -1751,7 +1751,7 @@ fn the_operator_has_a_region_of_a_wall_plastered() {
         out.acks
     );
     let south = Command::PlasterSurface {
-        surface: SurfaceName::Wall(WallName::South),
+        surface: SurfaceId::Wall(WallName::South),
         region: Some(region),
     };
     let r = command("r", robot.now, south);

@@ -10,39 +10,8 @@
 use crate::SprayTool;
 use nalgebra::{Point3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
+pub use stucco_core::{Obstacle, SurfaceId};
 use stucco_core::{SurfaceFrame, WallName};
-
-/// A surface of the room.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SurfaceId {
-    /// A wall.
-    Wall(WallName),
-    /// The ceiling.
-    Ceiling,
-}
-
-impl SurfaceId {
-    /// The five surfaces of a rectangular room.
-    pub const ALL: [SurfaceId; 5] = [
-        SurfaceId::Wall(WallName::West),
-        SurfaceId::Wall(WallName::South),
-        SurfaceId::Wall(WallName::East),
-        SurfaceId::Wall(WallName::North),
-        SurfaceId::Ceiling,
-    ];
-
-    /// A short name for reports and file names.
-    pub fn name(self) -> &'static str {
-        match self {
-            SurfaceId::Wall(WallName::West) => "west",
-            SurfaceId::Wall(WallName::South) => "south",
-            SurfaceId::Wall(WallName::East) => "east",
-            SurfaceId::Wall(WallName::North) => "north",
-            SurfaceId::Ceiling => "ceiling",
-        }
-    }
-}
 
 /// An axis-aligned rectangle of a surface's plane, m.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -157,19 +126,6 @@ pub struct WallOpening {
     pub along_m: [f64; 2],
     /// Its bottom and top above the floor, m (a door's bottom is 0).
     pub sill_head_m: [f64; 2],
-}
-
-/// Something standing on the floor: the robot cannot stand on it, and the
-/// nozzle cannot reach below its top behind it.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Obstacle {
-    /// Its footprint's south-west corner in the room frame, m.
-    pub min_m: [f64; 2],
-    /// Its footprint's north-east corner, m.
-    pub max_m: [f64; 2],
-    /// Its height, m.
-    pub height_m: f64,
 }
 
 /// A rectangular room as the map knows it: what the planner plans on.

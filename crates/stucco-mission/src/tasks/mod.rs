@@ -8,7 +8,6 @@
 //! task is made from its kind.
 
 mod door;
-mod failure;
 mod localize;
 mod motion;
 mod plaster;
@@ -28,7 +27,7 @@ use stucco_core::{DriveCommand, Stamp, ToolCommand};
 use stucco_plan::Plan;
 
 pub(crate) use door::route;
-pub use failure::TaskFailure;
+pub use stucco_core::telemetry::TaskFailure;
 
 /// Run-in along the wall before a pass starts, m: the line law's distance
 /// to settle on the standoff from where the robot could turn (the offset

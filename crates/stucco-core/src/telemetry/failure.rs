@@ -1,11 +1,11 @@
 //! Why a task (and with it the mission) failed: typed, for programs, and
 //! each with the sentence a person reads.
 
-use crate::task::WallName;
-use serde::Serialize;
+use crate::WallName;
+use serde::{Deserialize, Serialize};
 
 /// Why a task failed. New kinds may come: match with a wildcard.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "code", rename_all = "snake_case")]
 #[non_exhaustive]
 pub enum TaskFailure {

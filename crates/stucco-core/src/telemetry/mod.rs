@@ -4,6 +4,16 @@
 //! robot writes these and `stucco op` (or a console) reads them back as
 //! the same types.
 
+mod coverage;
+mod event;
+mod failure;
+mod map;
+
+pub use coverage::{PlasterCoverage, SurfaceCoverage};
+pub use event::{Event, EventKind};
+pub use failure::TaskFailure;
+pub use map::{DoorEstimate, Estimate, Obstacle, WindowEstimate};
+
 use crate::{DriveCommand, Pose2, Stamp, WallName};
 use serde::{Deserialize, Serialize};
 

@@ -1,14 +1,11 @@
 //! What the executive tells of what happened: the event log's entries.
 
-use crate::executive::OperatorCommand;
-use crate::supervisor::Hazard;
-use crate::task::WallName;
-use crate::tasks::TaskFailure;
-use serde::Serialize;
-use stucco_core::Stamp;
+use super::{Hazard, TaskFailure};
+use crate::{OperatorCommand, Stamp, WallName};
+use serde::{Deserialize, Serialize};
 
 /// Something that happened, for the event log.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Event {
     /// When.
     pub stamp: Stamp,
@@ -18,7 +15,7 @@ pub struct Event {
 }
 
 /// The kinds of events.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]
 pub enum EventKind {
     /// The mission began (or resumed from a checkpoint at `first_task`).
@@ -181,4 +178,91 @@ pub enum EventKind {
         /// Why.
         reason: String,
     },
+}
+
+impl EventKind {
+    /// The kind's name, as the JSON's `event` writes it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            EventKind::MissionStarted { .. } => "mission_started",
+            EventKind::TaskStarted { .. } => "task_started",
+            EventKind::BehaviourStarted { .. } => "behaviour_started",
+            EventKind::TaskDone { .. } => "task_done",
+            EventKind::TaskSkipped { .. } => "task_skipped",
+            EventKind::TaskFailed { .. } => "task_failed",
+            EventKind::OperatorPrompt { .. } => "operator_prompt",
+            EventKind::Paused { .. } => "paused",
+            EventKind::Resumed => "resumed",
+            EventKind::EStop => "e_stop",
+            EventKind::SafetyStop { .. } => "safety_stop",
+            EventKind::SafetyClear => "safety_clear",
+            EventKind::Aborted => "aborted",
+            EventKind::MissionDone => "mission_done",
+            EventKind::MissionFailed { .. } => "mission_failed",
+            EventKind::LinkLost => "link_lost",
+            EventKind::LinkRestored => "link_restored",
+            EventKind::StationStarted { .. } => "station_started",
+            EventKind::WindowEdgeLook { .. } => "window_edge_look",
+            EventKind::WindowFound { .. } => "window_found",
+            EventKind::StationGivenUp { .. } => "station_given_up",
+            EventKind::PassDone { .. } => "pass_done",
+            EventKind::RoomEntered { .. } => "room_entered",
+            EventKind::PlanMade { .. } => "plan_made",
+            EventKind::CommandRefused { .. } => "command_refused",
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// What a robot writes a reader reads back the same, kind for kind:
+    /// the tag beside the stamp, nested tags (a failure's code, a
+    /// hazard's kind) and numbers included.
+    #[test]
+    fn events_read_back_as_written() {
+        let kinds = [
+            EventKind::MissionStarted {
+                tasks: 4,
+                first_task: 2,
+            },
+            EventKind::TaskFailed {
+                task: 1,
+                reason: TaskFailure::WayBlocked.to_string(),
+                failure: TaskFailure::NoLoop {
+                    inset_m: 0.45,
+                    room_m: [3.2, 2.9],
+                },
+            },
+            EventKind::EStop,
+            EventKind::SafetyStop {
+                hazard: Hazard::Obstacle,
+            },
+            EventKind::WindowEdgeLook {
+                task: 3,
+                wall: WallName::North,
+                along_m: 1.25,
+                sigma_m: 0.031,
+            },
+            EventKind::CommandRefused {
+                command: OperatorCommand::Resume,
+                reason: "not paused".to_owned(),
+            },
+        ];
+        for (k, kind) in kinds.into_iter().enumerate() {
+            let event = Event {
+                stamp: Stamp::from_nanos(1_000_000_007 * k as i64),
+                kind,
+            };
+            let text = serde_json::to_string(&event).unwrap();
+            assert!(
+                text.contains(&format!("\"event\":\"{}\"", event.kind.name())),
+                "{text}"
+            );
+            let back: Event = serde_json::from_str(&text).unwrap();
+            assert_eq!(back, event, "{text}");
+        }
+    }
 }
