@@ -351,13 +351,13 @@ enum OpAction {
     /// Move relative to where the robot is.
     Move {
         /// Forward, m.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         dx: f64,
         /// Left, m.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         dy: f64,
         /// Turn, degrees.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         dtheta: f64,
         /// Move to (dx, dy, dθ) in this wall's frame (facing it from
         /// inside, origin at its middle, y to the left) instead of the
@@ -402,11 +402,11 @@ enum OpAction {
     },
     /// Drive directly for a moment.
     Jog {
-        /// Front-wheel speed, m/s.
-        #[arg(long)]
+        /// Front-wheel speed, m/s (negative: backwards).
+        #[arg(long, allow_negative_numbers = true)]
         speed: f64,
-        /// Steering, degrees.
-        #[arg(long, default_value_t = 0.0)]
+        /// Steering, degrees (negative: to the right).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         steer: f64,
         /// Time to live, s.
         #[arg(long, default_value_t = 0.5)]
@@ -1330,4 +1330,34 @@ fn stop_on_signal() -> Arc<AtomicBool> {
         eprintln!("warning: Ctrl-C will kill the process at once: {e}");
     }
     stop
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::panic)]
+mod tests {
+    use super::*;
+
+    /// Moves and jogs backwards or to the right take negative numbers as
+    /// the README writes them.
+    #[test]
+    fn negative_moves_and_jogs_parse() {
+        let action = |args: &[&str]| match Cli::try_parse_from(args).unwrap().command {
+            Command::Op {
+                action: Some(a), ..
+            } => a,
+            _ => panic!("not an op command"),
+        };
+        let back = action(&["stucco", "op", "r1", "move", "--door", "0", "--dx", "-1"]);
+        assert!(
+            matches!(back, OpAction::Move { dx, .. } if dx == -1.0),
+            "{back:?}"
+        );
+        let jog = action(&[
+            "stucco", "op", "r1", "jog", "--speed", "-0.2", "--steer", "-10",
+        ]);
+        assert!(
+            matches!(jog, OpAction::Jog { speed, steer, .. } if speed == -0.2 && steer == -10.0),
+            "{jog:?}"
+        );
+    }
 }

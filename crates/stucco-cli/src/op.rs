@@ -131,11 +131,18 @@ impl Operator {
     /// Sends `count` status queries one after another and measures each
     /// one's round trip to its acknowledgement.
     pub fn bench(&mut self, robot: &str, count: usize) -> Result<BenchReport> {
-        let now = self.robot_time(robot, Duration::from_secs(3))?;
+        let states = self.client.watch(keys::state(robot))?;
+        let mut now = self.robot_time(robot, Duration::from_secs(3))?;
         let mut ms = Vec::with_capacity(count);
         for _ in 0..count {
-            // The robot's clock runs on while we measure: a long deadline.
-            let t = self.telecommand(now, 1e6, Command::Status);
+            // The robot's clock runs on while we measure: the latest state
+            // gives it, and the deadline is as long as the robot takes.
+            while let Ok(Some(s)) = states.try_recv() {
+                if let Ok(state) = parse::<RobotState>(&s) {
+                    now = state.stamp;
+                }
+            }
+            let t = self.telecommand(now, stucco_mission::MAX_DEADLINE_AHEAD_S, Command::Status);
             let t0 = Instant::now();
             let ack =
                 self.client

@@ -68,6 +68,9 @@ struct RecordedPoints {
     stamp: Stamp,
     scan: u64,
     points: Vec<[f64; 2]>,
+    /// Echoes kept from earlier scans, out of this one's view.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    unseen: Vec<[f64; 2]>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -159,6 +162,7 @@ impl<W: Write + Seek> Recorder<W> {
         if new_scan {
             self.scan += 1;
             let points = inputs.obstacles.iter().map(|p| [p.x, p.y]).collect();
+            let unseen = inputs.unseen.iter().map(|p| [p.x, p.y]).collect();
             let scan = self.scan;
             self.put(
                 "/scan/points",
@@ -167,6 +171,7 @@ impl<W: Write + Seek> Recorder<W> {
                     stamp,
                     scan,
                     points,
+                    unseen,
                 },
             )?;
         }
@@ -285,6 +290,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
     let mut exec: Option<Executive> = None;
     let mut name = String::new();
     let mut points: Vec<Point2<f64>> = Vec::new();
+    let mut unseen: Vec<Point2<f64>> = Vec::new();
     let mut pending: Option<RecordedInputs> = None;
     let mut report = ReplayReport {
         mission: String::new(),
@@ -314,6 +320,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                 let p: RecordedPoints =
                     serde_json::from_slice(&m.data).map_err(|_| json("/scan/points"))?;
                 points = p.points.iter().map(|q| Point2::new(q[0], q[1])).collect();
+                unseen = p.unseen.iter().map(|q| Point2::new(q[0], q[1])).collect();
             }
             "/executive/inputs" => {
                 let i: RecordedInputs =
@@ -326,6 +333,7 @@ pub fn replay_run(path: &Path) -> Result<ReplayReport> {
                     &Inputs {
                         estimate: &i.estimate,
                         obstacles: &points,
+                        unseen: &unseen,
                         bumper: i.bumper,
                         estop: i.estop,
                         operator: &i.operator,

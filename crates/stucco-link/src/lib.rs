@@ -59,6 +59,10 @@ pub type Subscription = Subscriber<RingChannelHandler<Sample>>;
 /// slowed the robot's loop to a sixtieth of its pace).
 pub const WATCH_CAPACITY: usize = 1024;
 
+/// The largest telecommand taken, bytes (a query's payload): larger ones
+/// are refused unread.
+pub const MAX_COMMAND_BYTES: usize = 4096;
+
 /// Runs a router: a session in router mode that the robots and operators
 /// of a site connect to; it routes until dropped.
 pub fn router(cfg: &LinkConfig) -> Result<Session, LinkError> {
@@ -293,14 +297,18 @@ impl RobotLink {
         let publisher = |k: String| -> Result<Publisher<'static>, LinkError> {
             session.declare_publisher(k).express(true).wait().map_err(z)
         };
-        // Replies and events are the operator's record of what the robot
-        // did: queued, never dropped, when the link is congested (zenoh
-        // drops a publisher's samples by default).
+        // Replies and events go first (their priority is above the
+        // telemetry's) but, like everything the robot publishes, are
+        // dropped rather than queued when a link is congested: a
+        // subscriber that stops reading must never hold up the robot's
+        // loop, and with it a stop. The record of what the robot did is
+        // the job's events.jsonl on its disk.
         let record = |k: String| -> Result<Publisher<'static>, LinkError> {
             session
                 .declare_publisher(k)
                 .express(true)
-                .congestion_control(zenoh::qos::CongestionControl::Block)
+                .priority(zenoh::qos::Priority::InteractiveHigh)
+                .congestion_control(zenoh::qos::CongestionControl::Drop)
                 .wait()
                 .map_err(z)
         };
@@ -376,9 +384,16 @@ impl RobotLink {
     fn accept_query(&mut self, q: Query, now: Stamp, out: &mut Vec<Telecommand>) {
         let parsed = q
             .payload()
-            .map(|p| p.to_bytes().into_owned())
             .ok_or_else(|| "no payload".to_owned())
-            .and_then(|b| serde_json::from_slice::<Telecommand>(&b).map_err(|e| e.to_string()));
+            .and_then(|p| {
+                if p.len() > MAX_COMMAND_BYTES {
+                    return Err(format!(
+                        "payload: {} bytes, at most {MAX_COMMAND_BYTES}",
+                        p.len()
+                    ));
+                }
+                serde_json::from_slice::<Telecommand>(&p.to_bytes()).map_err(|e| e.to_string())
+            });
         match parsed {
             Ok(t) => {
                 self.pending.push((t.id.clone(), q));

@@ -38,6 +38,7 @@ mod checkpoint;
 mod executive;
 mod file;
 mod floor;
+mod ledger;
 mod manoeuvre;
 mod model;
 mod plaster;
@@ -58,8 +59,11 @@ pub use file::{
     BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge, line_of, parse_toml,
 };
 pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom};
+pub use ledger::{MAX_DEADLINE_AHEAD_S, MAX_ID_BYTES, MAX_KEPT, MAX_OPERATOR_BYTES};
 pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wall};
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
-pub use supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict};
+pub use supervisor::{
+    FailurePolicy, Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict,
+};
 pub use task::{Landmark, OnTimeout, Region, Side, SpraySettings, TaskSpec, WallName, spray_with};
 pub use tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw};

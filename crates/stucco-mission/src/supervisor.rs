@@ -35,6 +35,20 @@ pub enum LinkLossPolicy {
     Continue,
 }
 
+/// What a scripted task's failure does to the mission (an operator's task
+/// fails alone whatever the policy: the robot stands ready for the next
+/// command).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FailurePolicy {
+    /// The mission stops, failed; the operator's commands are still taken,
+    /// and `resume` tries the failed task again.
+    #[default]
+    Stop,
+    /// The mission goes on with its next task, and ends failed.
+    Continue,
+}
+
 /// The supervisor's settings (a mission file's `[failsafe]` table).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -64,6 +78,8 @@ pub struct SafetyConfig {
     pub on_link_loss: LinkLossPolicy,
     /// The link is lost when no operator heartbeat came for this long, s.
     pub link_timeout_s: f64,
+    /// What a scripted task's failure does to the mission.
+    pub on_task_failure: FailurePolicy,
 }
 
 impl Default for SafetyConfig {
@@ -81,6 +97,7 @@ impl Default for SafetyConfig {
             blocked_timeout_s: 30.0,
             on_link_loss: LinkLossPolicy::Pause,
             link_timeout_s: 1.0,
+            on_task_failure: FailurePolicy::Stop,
         }
     }
 }
@@ -204,11 +221,14 @@ impl Supervisor {
     }
 
     /// Checks `cmd` against the obstacles seen and the estimate; `dt_s`
-    /// since the last check.
+    /// since the last check. `unseen` are echoes seen before where the
+    /// laser does not look now (behind the robot): a command that reverses
+    /// is checked against them too.
     pub fn check(
         &mut self,
         cmd: DriveCommand,
         obstacles: &[Point2<f64>],
+        unseen: &[Point2<f64>],
         est: &Estimate,
         dt_s: f64,
     ) -> Verdict {
@@ -219,7 +239,7 @@ impl Supervisor {
                 hazard: Some(Hazard::Lost),
             };
         }
-        if self.blocked(&cmd, obstacles) {
+        if self.blocked(&cmd, obstacles) || (cmd.speed_mps < 0.0 && self.blocked(&cmd, unseen)) {
             self.clear_for_s = 0.0;
         } else {
             self.clear_for_s += dt_s;
@@ -273,12 +293,12 @@ mod tests {
         let est = estimate(0.005);
         // Front at 0.75 m; at 0.5 m/s the field reaches 0.75 + 0.156 + 0.15 + 0.05.
         let person = [Point2::new(1.0, 0.1)];
-        let v = s.check(FORWARD, &person, &est, 0.02);
+        let v = s.check(FORWARD, &person, &[], &est, 0.02);
         assert_eq!(v.hazard, Some(Hazard::Obstacle));
         assert_eq!(v.drive.speed_mps, 0.0);
         // Gone: still stopped until the field has been clear for 0.5 s.
         let mut t = 0.0f64;
-        while s.check(FORWARD, &[], &est, 0.02).hazard.is_some() {
+        while s.check(FORWARD, &[], &[], &est, 0.02).hazard.is_some() {
             t += 0.02;
             assert!(t < 1.0);
         }
@@ -320,16 +340,19 @@ mod tests {
     fn a_lost_estimate_stops_and_comes_back_with_hysteresis() {
         let mut s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
         assert_eq!(
-            s.check(FORWARD, &[], &estimate(0.06), 0.02).hazard,
+            s.check(FORWARD, &[], &[], &estimate(0.06), 0.02).hazard,
             Some(Hazard::Lost)
         );
         assert!(!s.spray_allowed(&estimate(0.06)));
         // Under the limit but above 80% of it: still lost.
         assert_eq!(
-            s.check(FORWARD, &[], &estimate(0.045), 0.02).hazard,
+            s.check(FORWARD, &[], &[], &estimate(0.045), 0.02).hazard,
             Some(Hazard::Lost)
         );
-        assert_eq!(s.check(FORWARD, &[], &estimate(0.03), 0.02).hazard, None);
+        assert_eq!(
+            s.check(FORWARD, &[], &[], &estimate(0.03), 0.02).hazard,
+            None
+        );
         assert!(!s.spray_allowed(&estimate(0.03)));
         assert!(s.spray_allowed(&estimate(0.008)));
         let mut go_on = Supervisor::new(
@@ -339,7 +362,7 @@ mod tests {
             },
             VehicleSpec::default(),
         );
-        let v = go_on.check(FORWARD, &[], &estimate(0.2), 0.02);
+        let v = go_on.check(FORWARD, &[], &[], &estimate(0.2), 0.02);
         assert_eq!(v.drive, FORWARD);
         assert!(!go_on.spray_allowed(&estimate(0.2)));
     }

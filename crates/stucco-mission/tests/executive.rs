@@ -112,6 +112,7 @@ impl Robot {
 #[derive(Default)]
 struct Seen<'a> {
     obstacles: &'a [Point2<f64>],
+    unseen: &'a [Point2<f64>],
     estop: bool,
     operator: &'a [OperatorCommand],
     telecommands: &'a [Telecommand],
@@ -137,6 +138,7 @@ fn ask(exec: &mut Executive, robot: &Robot, seen: Seen) -> Outputs {
         &Inputs {
             estimate: &est,
             obstacles: seen.obstacles,
+            unseen: seen.unseen,
             bumper: false,
             estop: seen.estop,
             operator: seen.operator,
@@ -2408,4 +2410,388 @@ fn a_second_coat_of_another_thickness_is_a_task_with_its_own_settings() {
         plans[&0].spray_s(),
         plans[&1].spray_s()
     );
+}
+
+// ---- Operator link safety --------------------------------------------------
+
+/// One tick with the telecommands `make` writes at the robot's time.
+fn send(
+    exec: &mut Executive,
+    robot: &mut Robot,
+    make: impl FnOnce(Stamp) -> Vec<Telecommand>,
+) -> Outputs {
+    let t = make(robot.now);
+    tick_with(exec, robot, &t)
+}
+
+/// A jog is the operator driving: taken in any state but the e-stop's —
+/// paused (the task held), after the mission's tasks are over — and ended
+/// by a stop or the e-stop.
+#[test]
+fn a_jog_drives_in_any_state_but_the_e_stop() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(vec![forward(0.2)], false);
+    run(&mut exec, &mut robot, 5.0, |_, _| Vec::new());
+    assert_eq!(exec.mode(), &MissionMode::Done);
+    let jog = |id: &str, at: Stamp| {
+        command(
+            id,
+            at,
+            Command::Jog {
+                speed_mps: -0.2,
+                steer_rad: 0.0,
+                ttl_s: 0.5,
+            },
+        )
+    };
+    // After the mission's tasks are over.
+    let out = send(&mut exec, &mut robot, |now| vec![jog("j1", now)]);
+    assert_eq!(out.acks[0].reply, Reply::Accepted);
+    assert_eq!(out.drive.speed_mps, -0.2);
+    // Paused by a stop: the stop ends the jog at once; a new jog drives.
+    let mut exec = executive(vec![forward(2.0)], false);
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    for _ in 0..50 {
+        tick_with(&mut exec, &mut robot, &[]);
+    }
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command("s", now, Command::Stop)]
+    });
+    assert_eq!(out.drive, DriveCommand::STOP);
+    assert!(matches!(exec.mode(), MissionMode::Paused { .. }));
+    let x0 = robot.pose.x;
+    for k in 0..10 {
+        let cmds = if k == 0 {
+            vec![jog("j2", robot.now)]
+        } else {
+            Vec::new()
+        };
+        let out = tick_with(&mut exec, &mut robot, &cmds);
+        assert_eq!(out.drive.speed_mps, -0.2, "tick {k}");
+    }
+    assert!(robot.pose.x < x0 - 0.01, "{} → {}", x0, robot.pose.x);
+    assert!(
+        matches!(exec.mode(), MissionMode::Paused { .. }),
+        "the task stays held"
+    );
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command("s2", now, Command::Stop)]
+    });
+    assert_eq!(out.drive, DriveCommand::STOP);
+    assert!(
+        out.acks
+            .iter()
+            .any(|a| a.id == "j2" && matches!(a.reply, Reply::Failed { .. }))
+    );
+    // E-stopped: the e-stop ends a jog, and a jog is refused until resumed.
+    send(&mut exec, &mut robot, |now| vec![jog("j3", now)]);
+    let out = ask(
+        &mut exec,
+        &robot,
+        Seen {
+            estop: true,
+            ..Seen::default()
+        },
+    );
+    assert_eq!(out.drive, DriveCommand::STOP);
+    let out = send(&mut exec, &mut robot, |now| vec![jog("j4", now)]);
+    assert!(
+        matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains("e-stop")),
+        "{:?}",
+        out.acks
+    );
+    assert_eq!(out.drive, DriveCommand::STOP);
+}
+
+/// A stop always stops: stale, or reusing an id an earlier command had.
+/// Any other command reusing an id for other content is refused, naming
+/// the id; a true retry gets the earlier reply.
+#[test]
+fn a_stop_always_stops_and_an_id_reused_for_another_command_is_refused() {
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(vec![forward(2.0)], false);
+    let status = command("c1", robot.now, Command::Status);
+    let out = tick_with(&mut exec, &mut robot, std::slice::from_ref(&status));
+    assert_eq!(out.acks[0].reply, Reply::Done);
+    for _ in 0..50 {
+        tick_with(&mut exec, &mut robot, &[]);
+    }
+    assert!(robot.pose.x > 1.01);
+    // A stop reusing the status's id.
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command("c1", now, Command::Stop)]
+    });
+    assert_eq!(out.drive, DriveCommand::STOP);
+    assert!(matches!(exec.mode(), MissionMode::Paused { reason } if reason == "stop from ann"));
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command("r", now, Command::Resume)]
+    });
+    assert_eq!(out.acks[0].reply, Reply::Done);
+    // A stale stop.
+    let mut stale = command("s-old", Stamp::ZERO, Command::Stop);
+    stale.deadline = Stamp::from_secs_f64(0.1);
+    let out = tick_with(&mut exec, &mut robot, &[stale]);
+    assert_eq!(out.drive, DriveCommand::STOP);
+    assert!(matches!(exec.mode(), MissionMode::Paused { .. }));
+    // Another command under a used id: refused, nothing done.
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command("c1", now, Command::Resume)]
+    });
+    assert!(
+        matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains("another command")),
+        "{:?}",
+        out.acks
+    );
+    assert!(matches!(exec.mode(), MissionMode::Paused { .. }));
+    // The status itself again: the same reply, once more.
+    let out = tick_with(&mut exec, &mut robot, &[status]);
+    assert_eq!(out.acks[0].reply, Reply::Done);
+}
+
+/// Targets no robot could reach are refused when the command arrives:
+/// nothing is queued, and the mission goes on as it was.
+#[test]
+fn absurd_targets_are_refused_at_acceptance() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = standing_by();
+    tick_with(&mut exec, &mut robot, &[]);
+    let mv = |dx_m: f64, dy_m: f64| Command::MoveRelative {
+        dx_m,
+        dy_m,
+        dtheta_deg: 0.0,
+        landmark: None,
+    };
+    for (k, (cmd, why)) in [
+        (mv(1e300, 0.0), "outside"),
+        (mv(4.0, 0.0), "outside"),
+        (mv(0.0, -1.4), "outside"),
+        (
+            Command::FollowWall {
+                wall: WallName::South,
+                standoff_m: 0.6,
+                from_m: 1.0,
+                to_m: 40.0,
+            },
+            "to_m",
+        ),
+        (
+            Command::AlignToWall {
+                wall: WallName::West,
+                standoff_m: 9.0,
+                at_m: 1.0,
+                side: Side::Left,
+            },
+            "standoff_m",
+        ),
+        (
+            Command::MoveRelative {
+                dx_m: -1.0,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+                landmark: Some(Landmark::Door(99)),
+            },
+            "door 99",
+        ),
+        (Command::PassDoor { door: 99 }, "door 99"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = send(&mut exec, &mut robot, |now| {
+            vec![command(&format!("a{k}"), now, cmd)]
+        });
+        assert!(
+            matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains(why)),
+            "{k}: {:?}",
+            out.acks
+        );
+    }
+    assert_eq!(exec.tasks().len(), 1, "nothing queued");
+    assert_eq!(exec.mode(), &MissionMode::Running);
+    // A move that stays in the room is taken.
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command("ok", now, mv(1.0, 0.0))]
+    });
+    assert_eq!(out.acks[0].reply, Reply::Accepted);
+}
+
+/// An operator's task that fails is answered `failed` and the robot
+/// stands ready: the next command runs. A scripted task's failure stops
+/// the mission (the default policy), the operator's commands are still
+/// taken, and `resume` tries the failed task again; with
+/// `on_task_failure = "continue"` the mission goes on and ends failed.
+#[test]
+fn a_failed_task_leaves_the_robot_ready_for_the_next_command() {
+    let impossible_pass = TaskSpec::FollowWall {
+        wall: WallName::South,
+        standoff_m: 0.6,
+        from_m: 1.0,
+        to_m: 4.0,
+        speed_mps: 0.25,
+    };
+    // The operator's task fails alone.
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = standing_by();
+    tick_with(&mut exec, &mut robot, &[]);
+    let pass = command(
+        "f1",
+        robot.now,
+        Command::FollowWall {
+            wall: WallName::South,
+            standoff_m: 0.6,
+            from_m: 1.0,
+            to_m: 4.0,
+        },
+    );
+    let mut replies = tick_with(&mut exec, &mut robot, &[pass]).acks;
+    for _ in 0..5 {
+        replies.extend(tick_with(&mut exec, &mut robot, &[]).acks);
+    }
+    assert!(
+        replies
+            .iter()
+            .any(|a| a.id == "f1" && matches!(a.reply, Reply::Failed { .. }))
+    );
+    assert!(
+        !matches!(exec.mode(), MissionMode::Failed { .. }),
+        "{:?}",
+        exec.mode()
+    );
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command(
+            "m",
+            now,
+            Command::MoveRelative {
+                dx_m: 0.3,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+                landmark: None,
+            },
+        )]
+    });
+    assert_eq!(out.acks[0].reply, Reply::Accepted);
+    let mut done = false;
+    for _ in 0..300 {
+        done |= tick_with(&mut exec, &mut robot, &[])
+            .acks
+            .iter()
+            .any(|a| a.id == "m" && a.reply == Reply::Done);
+    }
+    assert!(done, "the next command ran");
+
+    // A scripted task's failure stops the mission; the operator still
+    // commands; resumed, the failed task is tried again.
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(vec![impossible_pass.clone(), forward(0.3)], false);
+    run(&mut exec, &mut robot, 1.0, |_, _| Vec::new());
+    assert!(matches!(exec.mode(), MissionMode::Failed { .. }));
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command(
+            "m",
+            now,
+            Command::MoveRelative {
+                dx_m: 0.2,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+                landmark: None,
+            },
+        )]
+    });
+    assert_eq!(out.acks[0].reply, Reply::Accepted);
+    let mut steps = 0;
+    while !matches!(exec.mode(), MissionMode::Failed { .. }) {
+        tick_with(&mut exec, &mut robot, &[]);
+        steps += 1;
+        assert!(steps < 500, "{:?}", exec.mode());
+    }
+    assert_eq!(
+        exec.status()[2],
+        TaskStatus::Pending,
+        "the mission's own task stays held"
+    );
+    let out = send(&mut exec, &mut robot, |now| {
+        vec![command("r", now, Command::Resume)]
+    });
+    assert_eq!(out.acks[0].reply, Reply::Done);
+    // Tried again (and, its pass still impossible, failed again).
+    assert_eq!(
+        kinds(&out.events),
+        ["resumed", "task_failed", "mission_failed"],
+        "{:?}",
+        out.events
+    );
+    assert!(matches!(exec.mode(), MissionMode::Failed { .. }));
+
+    // Going on past a failure, the mission ends failed for it.
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut cfg = config(false);
+    cfg.safety.on_task_failure = FailurePolicy::Continue;
+    let mut exec = Executive::new(cfg, vec![impossible_pass, forward(0.3)]);
+    let events = run(&mut exec, &mut robot, 10.0, |_, _| Vec::new());
+    assert_eq!(exec.status()[1], TaskStatus::Done, "{:?}", kinds(&events));
+    assert!(matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("corner")));
+}
+
+/// A million commands at 1,000 a second: the ids remembered for retries
+/// stay those within their deadlines (10 s ahead here), never all.
+#[test]
+fn a_million_commands_keep_the_memory_of_ids_bounded() {
+    let robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = standing_by();
+    let est = robot.estimate();
+    let mut most = 0;
+    for k in 0..1_000_000_u64 {
+        let now = Stamp::from_nanos(k as i64 * 1_000_000);
+        let acks = exec.telecommands(
+            now,
+            &[command(&format!("c{k}"), now, Command::Status)],
+            &est,
+        );
+        assert_eq!(acks[0].reply, Reply::Done);
+        most = most.max(exec.remembered_commands());
+    }
+    assert!(most <= 10_002, "{most} ids kept");
+}
+
+/// A jog backwards stops for what the laser saw before and no longer
+/// sees (behind the robot); forwards, such echoes hold nothing up.
+#[test]
+fn a_jog_backwards_stops_for_what_is_behind() {
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let mut exec = standing_by();
+    tick_with(&mut exec, &mut robot, &[]);
+    // A box 0.15 m behind the body (its back is 0.15 m behind the rear
+    // axle): within the field at 0.2 m/s.
+    let behind = [Point2::new(-0.3, 0.0), Point2::new(-0.3, 0.1)];
+    let jog = |id: &str, at: Stamp, speed_mps: f64| {
+        command(
+            id,
+            at,
+            Command::Jog {
+                speed_mps,
+                steer_rad: 0.0,
+                ttl_s: 0.5,
+            },
+        )
+    };
+    for (id, speed, moves) in [("back", -0.2, false), ("ahead", 0.2, true)] {
+        let t = [jog(id, robot.now, speed)];
+        let out = ask(
+            &mut exec,
+            &robot,
+            Seen {
+                unseen: &behind,
+                telecommands: &t,
+                ..Seen::default()
+            },
+        );
+        assert_eq!(out.drive.speed_mps != 0.0, moves, "{id}: {:?}", out.drive);
+        assert_eq!(exec.hazard().is_some(), !moves, "{id}");
+        send(&mut exec, &mut robot, |now| {
+            vec![command(&format!("{id}-stop"), now, Command::Stop)]
+        });
+        for _ in 0..30 {
+            tick_with(&mut exec, &mut robot, &[]);
+        }
+    }
 }

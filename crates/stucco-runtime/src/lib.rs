@@ -61,11 +61,13 @@
 #![warn(missing_docs)]
 
 mod checkpoint;
+mod echoes;
 mod event_log;
 mod perception;
 mod robot;
 
 pub use checkpoint::{Checkpointer, TaskTimes, windows_by_room};
+pub use echoes::EchoMemory;
 pub use event_log::EventLog;
 pub use perception::{DT_S, OBSTACLE_HEIGHT_M, Perception, RoomWindows};
 pub use robot::{Robot, Sink, SinkError};

@@ -187,6 +187,7 @@ impl<P: Platform> Robot<P> {
         let inputs = Inputs {
             estimate: &self.estimate,
             obstacles: self.perception.obstacles(),
+            unseen: self.perception.unseen_echoes(),
             bumper: self.bumper,
             estop,
             operator: &[],

@@ -29,6 +29,74 @@ use stucco_plan::Plan;
 pub(crate) use door::route;
 pub use stucco_core::telemetry::TaskFailure;
 
+/// Why `spec` cannot be carried out in the room `est` knows, if it cannot:
+/// a move that ends outside the room (or within half the body's width of
+/// a wall), a place along a wall that is not on it, a door or a landmark
+/// not known. Checked when an operator's command is taken, so an absurd
+/// target is refused at once rather than failing the task later.
+pub(crate) fn out_of_reach(
+    spec: &TaskSpec,
+    est: &Estimate,
+    config: &ExecutiveConfig,
+) -> Option<String> {
+    use crate::model::WallGeometry;
+    let length = |w| WallGeometry::of(w, est.room_m).length_m;
+    let along = |key: &str, w, at: f64| {
+        let l = length(w);
+        (!(0.0..=l).contains(&at)).then(|| {
+            format!("{key}: {at:.2} m is not on the {w:?} wall (0 to {l:.2} m)").to_lowercase()
+        })
+    };
+    let standoff = |w, s: f64| {
+        // The room across the wall, less the body's half width.
+        let across = match w {
+            stucco_core::WallName::West | stucco_core::WallName::East => est.room_m[0],
+            _ => est.room_m[1],
+        };
+        (s > across - 0.5 * config.vehicle.width_m)
+            .then(|| format!("standoff_m: {s:.2} m reaches past a {across:.2} m room"))
+    };
+    match spec {
+        TaskSpec::MoveRelative {
+            dx_m,
+            dy_m,
+            dtheta_deg,
+            landmark,
+            ..
+        } => {
+            let goal = match motion::goal([*dx_m, *dy_m, *dtheta_deg], landmark.as_ref(), est) {
+                Ok(g) => g,
+                Err(e) => return Some(e.to_string()),
+            };
+            let half = 0.5 * config.vehicle.width_m;
+            let inside = (half..=est.room_m[0] - half).contains(&goal.x)
+                && (half..=est.room_m[1] - half).contains(&goal.y);
+            (!inside).then(|| {
+                format!(
+                    "the move ends at ({:.2}, {:.2}) m, outside the {:.2} × {:.2} m room (or                      within half the body's width of a wall)",
+                    goal.x, goal.y, est.room_m[0], est.room_m[1]
+                )
+            })
+        }
+        TaskSpec::FollowWall {
+            wall,
+            standoff_m,
+            from_m,
+            to_m,
+            ..
+        } => along("from_m", *wall, *from_m)
+            .or_else(|| along("to_m", *wall, *to_m))
+            .or_else(|| standoff(*wall, *standoff_m)),
+        TaskSpec::AlignToWall {
+            wall,
+            standoff_m,
+            at_m,
+            ..
+        } => along("at_m", *wall, *at_m).or_else(|| standoff(*wall, *standoff_m)),
+        _ => None,
+    }
+}
+
 /// Run-in along the wall before a pass starts, m: the line law's distance
 /// to settle on the standoff from where the robot could turn (the offset
 /// falls by e every ~0.4 m at a wall-following speed).

@@ -32,12 +32,7 @@ impl MoveRelative {
 impl Task for MoveRelative {
     fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (est, pose) = (cx.est, cx.est.pose);
-        let frame = match &self.landmark {
-            None => pose,
-            Some(l) => landmark_frame(l, est)?,
-        };
-        let [dx_m, dy_m, dtheta_deg] = self.by;
-        let goal = frame * Pose2::new(dx_m, dy_m, dtheta_deg.to_radians());
+        let goal = goal(self.by, self.landmark.as_ref(), est)?;
         self.ways
             .queue
             .extend(way(cx.config, est, &pose, &goal, self.speed_mps));
@@ -55,6 +50,20 @@ impl Task for MoveRelative {
     fn clone_box(&self) -> Box<dyn Task> {
         Box::new(self.clone())
     }
+}
+
+/// Where a move by `(dx, dy, dθ)` (m, m, degrees) ends, in the room
+/// frame: in the robot's frame now, or in `landmark`'s.
+pub(crate) fn goal(
+    [dx_m, dy_m, dtheta_deg]: [f64; 3],
+    landmark: Option<&Landmark>,
+    est: &Estimate,
+) -> Result<Pose2, TaskFailure> {
+    let frame = match landmark {
+        None => est.pose,
+        Some(l) => landmark_frame(l, est)?,
+    };
+    Ok(frame * Pose2::new(dx_m, dy_m, dtheta_deg.to_radians()))
 }
 
 /// The frame of `landmark` in the room as `est` knows it: facing it from

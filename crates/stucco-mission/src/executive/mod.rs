@@ -4,11 +4,16 @@
 
 use crate::behaviour::BehaviourKind;
 use crate::floor::FloorPlan;
+use crate::ledger::Ledger;
 use crate::model::Estimate;
 use crate::plaster::{Cursor, PlasterCoverage, PlasterProgress};
-use crate::supervisor::{Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor};
+use crate::supervisor::{
+    FailurePolicy, Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor,
+};
 use crate::task::TaskSpec;
-use crate::tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw, route};
+mod commands;
+
+use crate::tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw};
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -16,9 +21,7 @@ use stucco_control::GainSchedule;
 pub use stucco_core::MissionMode;
 pub use stucco_core::OperatorCommand;
 pub use stucco_core::telemetry::{Event, EventKind};
-use stucco_core::{
-    Ack, Command, DriveCommand, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec,
-};
+use stucco_core::{Ack, DriveCommand, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec};
 use stucco_plan::{Plan, SprayTool};
 
 /// Where the nozzle waits while the robot drives, robot frame, m: over
@@ -52,6 +55,9 @@ pub struct Inputs<'a> {
     /// The last scan's echoes in the robot's frame (rear axle at the
     /// origin), for the protective field.
     pub obstacles: &'a [Point2<f64>],
+    /// Echoes seen before where the laser does not look now (behind the
+    /// robot), in the robot's frame: a reversing robot stops for them.
+    pub unseen: &'a [Point2<f64>],
     /// A bumper touched something.
     pub bumper: bool,
     /// The e-stop is pressed.
@@ -164,8 +170,14 @@ pub struct Executive {
     /// True for the tasks of the mission file (a checkpoint keeps those),
     /// false for the operator's.
     scripted: Vec<bool>,
-    /// The last reply to every telecommand taken: a retry gets it again.
-    replies: BTreeMap<String, Reply>,
+    /// The telecommands taken and their replies, while a retry may come.
+    ledger: Ledger,
+    /// How the scripted mission ended (failed or aborted) while the
+    /// operator's tasks run: the state it returns to when they are over.
+    closed: Option<MissionMode>,
+    /// The scripted task whose failure stopped the mission: `resume`
+    /// tries it again.
+    failed_task: Option<usize>,
     /// Operator tasks by index, and the telecommand each answers.
     waiting: BTreeMap<usize, String>,
     /// Why the mission failed, when it did.
@@ -203,7 +215,9 @@ impl Executive {
             lost_since: None,
             continue_asked: false,
             scripted: vec![true; n],
-            replies: BTreeMap::new(),
+            ledger: Ledger::default(),
+            closed: None,
+            failed_task: None,
             waiting: BTreeMap::new(),
             jog: None,
             failure: None,
@@ -329,6 +343,12 @@ impl Executive {
         }
     }
 
+    /// Telecommand ids remembered for their retries (bounded: see
+    /// [`crate::MAX_KEPT`]).
+    pub fn remembered_commands(&self) -> usize {
+        self.ledger.len()
+    }
+
     /// Why the mission failed (the sentence is in its mode's reason).
     pub fn failure(&self) -> Option<&TaskFailure> {
         self.failure.as_ref()
@@ -402,6 +422,9 @@ impl Executive {
         // The e-stop overrides everything, at once.
         if inputs.estop && !self.mode.is_final() && self.mode != MissionMode::EStopped {
             self.emit(now, EventKind::EStop);
+            if let Some((_, _, id)) = self.jog.take() {
+                self.reply(now, &id, Reply::failed("e_stop", "e-stop pressed"));
+            }
             if self.config.unattended {
                 self.fail(now, TaskFailure::EStop);
                 checkpoint_due = true;
@@ -425,12 +448,17 @@ impl Executive {
             self.jog = None;
             self.reply(now, &id, Reply::Done);
         }
-        if self.mode == MissionMode::Running {
-            let (cmd, unit_done) = match &self.jog {
-                // Jogging holds the task where it is.
-                Some((cmd, _, _)) => (*cmd, false),
-                None => self.run(now, inputs.estimate),
-            };
+        if let Some((cmd, _, _)) = self.jog {
+            // The operator drives, in any mode but the e-stop's (a jog is
+            // refused then): the task is held where it is, and the
+            // supervisor guards the jog as any command, backwards too.
+            let verdict =
+                self.supervisor
+                    .check(cmd, inputs.obstacles, inputs.unseen, inputs.estimate, dt);
+            self.note_hazard(now, verdict.hazard);
+            drive = verdict.drive;
+        } else if self.mode == MissionMode::Running {
+            let (cmd, unit_done) = self.run(now, inputs.estimate);
             checkpoint_due |= unit_done | std::mem::take(&mut self.effects.checkpoint);
             drive = self.supervise(now, cmd, inputs, dt, &mut checkpoint_due);
         } else {
@@ -438,9 +466,13 @@ impl Executive {
             // what the supervisor holds the robot for is still told as it
             // changes — a hold that has gone is cleared — with no timers
             // run (a lost estimate fails nothing that is not running).
-            let verdict =
-                self.supervisor
-                    .check(DriveCommand::STOP, inputs.obstacles, inputs.estimate, dt);
+            let verdict = self.supervisor.check(
+                DriveCommand::STOP,
+                inputs.obstacles,
+                inputs.unseen,
+                inputs.estimate,
+                dt,
+            );
             // A standing robot's path is empty: an obstacle hold stays as
             // it was until the robot would move again.
             if self.hazard != Some(Hazard::Obstacle) {
@@ -470,250 +502,6 @@ impl Executive {
         }
     }
 
-    /// Takes telecommands between ticks (as soon as they arrive) and
-    /// returns the replies: acceptance never waits for the next control
-    /// period. The effects (a stop, a queued task, a jog) show in the next
-    /// tick's command.
-    pub fn telecommands(&mut self, now: Stamp, cmds: &[Telecommand], est: &Estimate) -> Vec<Ack> {
-        for t in cmds {
-            self.telecommand(now, t, est);
-        }
-        std::mem::take(&mut self.acks)
-    }
-
-    /// Follows an operator command: whether the progress changed, or why
-    /// it cannot be followed.
-    fn operator(&mut self, now: Stamp, cmd: OperatorCommand) -> Result<bool, String> {
-        let result = self.follow(now, cmd);
-        if let Err(reason) = &result {
-            self.emit(
-                now,
-                EventKind::CommandRefused {
-                    command: cmd,
-                    reason: reason.clone(),
-                },
-            );
-        }
-        result
-    }
-
-    fn follow(&mut self, now: Stamp, cmd: OperatorCommand) -> Result<bool, String> {
-        if self.mode.is_final() {
-            return Err("the mission is over".to_owned());
-        }
-        match cmd {
-            OperatorCommand::Pause => {
-                if self.mode != MissionMode::Running {
-                    return Err("not running".to_owned());
-                }
-                self.pause(now, "operator".to_owned());
-                Ok(false)
-            }
-            OperatorCommand::Resume => match self.mode {
-                MissionMode::Paused { .. } | MissionMode::EStopped => {
-                    self.mode = MissionMode::Running;
-                    self.emit(now, EventKind::Resumed);
-                    Ok(false)
-                }
-                _ => Err("not paused".to_owned()),
-            },
-            OperatorCommand::Abort => {
-                if let Some(a) = self.active.take() {
-                    self.status[a.index] = TaskStatus::Pending;
-                    self.answer(
-                        now,
-                        a.index,
-                        Reply::failed("aborted", "the mission was aborted"),
-                    );
-                }
-                self.mode = MissionMode::Aborted;
-                self.emit(now, EventKind::Aborted);
-                Ok(true)
-            }
-            OperatorCommand::Skip => {
-                let Some(a) = self.active.take() else {
-                    return Err("no task under way".to_owned());
-                };
-                self.status[a.index] = TaskStatus::Skipped;
-                self.emit(now, EventKind::TaskSkipped { task: a.index });
-                self.answer(now, a.index, Reply::failed("skipped", "skipped"));
-                Ok(true)
-            }
-            OperatorCommand::Continue => {
-                let waiting = self.active.as_ref().is_some_and(|a| {
-                    matches!(self.tasks[a.index], TaskSpec::WaitForOperator { .. })
-                });
-                if !waiting {
-                    return Err("no task is waiting for the operator".to_owned());
-                }
-                self.continue_asked = true;
-                Ok(false)
-            }
-        }
-    }
-
-    /// Sends `reply` to telecommand `id` (and keeps it for retries).
-    fn reply(&mut self, now: Stamp, id: &str, reply: Reply) {
-        self.replies.insert(id.to_owned(), reply.clone());
-        self.acks.push(Ack {
-            id: id.to_owned(),
-            stamp: now,
-            reply,
-        });
-    }
-
-    /// Answers the telecommand behind operator task `index`, if any.
-    fn answer(&mut self, now: Stamp, index: usize, reply: Reply) {
-        if let Some(id) = self.waiting.remove(&index) {
-            self.reply(now, &id, reply);
-        }
-    }
-
-    /// Takes a telecommand: a retry gets the last reply again and is not
-    /// carried out twice; a stale one is refused; `stop` acts at once.
-    fn telecommand(&mut self, now: Stamp, t: &Telecommand, est: &Estimate) {
-        if let Some(last) = self.replies.get(&t.id).cloned() {
-            self.acks.push(Ack {
-                id: t.id.clone(),
-                stamp: now,
-                reply: last,
-            });
-            return;
-        }
-        if now > t.deadline {
-            let late = now.seconds_since(t.deadline);
-            self.reply(
-                now,
-                &t.id,
-                Reply::Rejected {
-                    reason: format!("stale: {late:.3} s past its deadline"),
-                },
-            );
-            return;
-        }
-        let follow = |s: &mut Self, cmd: OperatorCommand| match s.operator(now, cmd) {
-            Ok(_) => Reply::Done,
-            Err(reason) => Reply::Rejected { reason },
-        };
-        let reply = match &t.command {
-            Command::Stop => {
-                self.jog = None;
-                if !self.mode.is_final() && self.mode == MissionMode::Running {
-                    self.pause(now, format!("stop from {}", t.operator));
-                }
-                Reply::Done
-            }
-            Command::Status => Reply::Done,
-            Command::Pause => follow(self, OperatorCommand::Pause),
-            Command::Resume => follow(self, OperatorCommand::Resume),
-            Command::Abort => follow(self, OperatorCommand::Abort),
-            Command::Skip => follow(self, OperatorCommand::Skip),
-            Command::Continue => follow(self, OperatorCommand::Continue),
-            Command::Jog {
-                speed_mps,
-                steer_rad,
-                ttl_s,
-            } => {
-                let v = &self.config.vehicle;
-                if self.mode.is_final() {
-                    Reply::Rejected {
-                        reason: "the mission is over".to_owned(),
-                    }
-                } else if !(ttl_s.is_finite() && *ttl_s > 0.0 && *ttl_s <= 2.0) {
-                    Reply::Rejected {
-                        reason: "ttl_s: more than 0 and at most 2 s".to_owned(),
-                    }
-                } else if !(speed_mps.abs() <= v.max_speed_mps
-                    && steer_rad.abs() <= v.max_steer_rad)
-                {
-                    Reply::Rejected {
-                        reason: "speed or steering beyond the robot's limits".to_owned(),
-                    }
-                } else {
-                    // A newer jog takes over an older one.
-                    if let Some((_, _, old)) = self.jog.take() {
-                        self.reply(now, &old, Reply::Done);
-                    }
-                    let drive = DriveCommand {
-                        speed_mps: *speed_mps,
-                        steer_rad: *steer_rad,
-                    };
-                    self.jog = Some((drive, now.offset_secs(*ttl_s), t.id.clone()));
-                    Reply::Accepted
-                }
-            }
-            task => match TaskSpec::from_command(task) {
-                None => Reply::Rejected {
-                    reason: "not a task".to_owned(),
-                },
-                Some(spec) => self.accept_task(t, spec, est),
-            },
-        };
-        self.reply(now, &t.id, reply);
-    }
-
-    /// Queues an operator's task to run next, or says why it cannot run.
-    fn accept_task(&mut self, t: &Telecommand, spec: TaskSpec, est: &Estimate) -> Reply {
-        if matches!(self.mode, MissionMode::Failed { .. } | MissionMode::Aborted) {
-            return Reply::Rejected {
-                reason: "the mission is over".to_owned(),
-            };
-        }
-        if let Some((key, why)) = spec.invalid() {
-            return Reply::Rejected {
-                reason: format!("{key}: {why}"),
-            };
-        }
-        if matches!(spec, TaskSpec::Plaster { .. }) && self.config.spray.is_none() {
-            return Reply::Rejected {
-                reason: "this robot carries no spray tool (the mission has no [spray])".to_owned(),
-            };
-        }
-        if let TaskSpec::PassDoor { door, .. } = spec
-            && door >= est.doors.len()
-        {
-            return Reply::Rejected {
-                reason: format!("door {door} is not known ({} found)", est.doors.len()),
-            };
-        }
-        if let TaskSpec::GoToRoom { room, .. } = &spec
-            && let Err(why) = route(&self.config, room, est)
-        {
-            return Reply::Rejected {
-                reason: why.to_string(),
-            };
-        }
-        // Next after the task under way; a task waiting for the operator
-        // has its answer.
-        let at = match &self.active {
-            Some(a) => {
-                if matches!(self.tasks[a.index], TaskSpec::WaitForOperator { .. }) {
-                    self.continue_asked = true;
-                }
-                a.index + 1
-            }
-            None => self
-                .status
-                .iter()
-                .position(|s| *s == TaskStatus::Pending)
-                .unwrap_or(self.tasks.len()),
-        };
-        self.tasks.insert(at, spec);
-        self.status.insert(at, TaskStatus::Pending);
-        self.scripted.insert(at, false);
-        self.waiting = std::mem::take(&mut self.waiting)
-            .into_iter()
-            .map(|(i, id)| (if i >= at { i + 1 } else { i }, id))
-            .collect();
-        self.waiting.insert(at, t.id.clone());
-        // Work done so far does not end the robot's day: a new task
-        // reopens the mission.
-        if self.mode == MissionMode::Done {
-            self.mode = MissionMode::Running;
-        }
-        Reply::Accepted
-    }
-
     fn pause(&mut self, now: Stamp, reason: String) {
         self.mode = MissionMode::Paused {
             reason: reason.clone(),
@@ -721,9 +509,15 @@ impl Executive {
         self.emit(now, EventKind::Paused { reason });
     }
 
-    /// The task under way (if any) and the mission fail for `failure`.
+    /// The task under way fails for `failure`. An operator's task fails
+    /// alone: the robot stands ready for the next command. A scripted
+    /// task stops the mission, or not, as the failsafe's `on_task_failure`
+    /// says; with nothing under way (an e-stop, a bumper with nobody
+    /// there), the mission fails.
     fn fail(&mut self, now: Stamp, failure: TaskFailure) {
         let reason = failure.to_string();
+        let index = self.active.as_ref().map(|a| a.index);
+        let scripted = index.map(|k| self.scripted[k]);
         if let Some(a) = self.active.take() {
             self.status[a.index] = TaskStatus::Failed {
                 reason: reason.clone(),
@@ -738,11 +532,40 @@ impl Executive {
                 },
             );
         }
-        self.failure = Some(failure);
-        self.mode = MissionMode::Failed {
+        // Touching something, or the e-stop, with nobody there ends the
+        // mission whatever the policy.
+        let unattended_stop = matches!(failure, TaskFailure::EStop | TaskFailure::Bumper);
+        let stops = match scripted {
+            _ if unattended_stop => true,
+            Some(false) => false,
+            Some(true) => self.config.safety.on_task_failure == FailurePolicy::Stop,
+            None => true,
+        };
+        let failed = MissionMode::Failed {
             reason: reason.clone(),
         };
-        self.emit(now, EventKind::MissionFailed { reason });
+        if stops {
+            self.failed_task = index.filter(|_| scripted == Some(true));
+            self.failure = Some(failure);
+            self.emit(now, EventKind::MissionFailed { reason });
+            // The operator's tasks still queued run first.
+            if self.closed.is_some() || self.next_task(true).is_some() {
+                self.closed = Some(failed);
+            } else {
+                self.mode = failed;
+            }
+        } else if self.failure.is_none() && scripted == Some(true) {
+            // The mission goes on, and ends failed for this one.
+            self.failure = Some(failure);
+        }
+    }
+
+    /// The next task to start: the first pending one (the operator's only,
+    /// while the mission's own are held, or when `operators_only`).
+    fn next_task(&self, operators_only: bool) -> Option<usize> {
+        let held = operators_only || self.closed.is_some();
+        (0..self.status.len())
+            .find(|&k| self.status[k] == TaskStatus::Pending && !(held && self.scripted[k]))
     }
 
     /// What the supervisor holds the robot for now, told when it changes.
@@ -756,7 +579,11 @@ impl Executive {
         }
     }
 
-    /// The supervisor over the task's command.
+    /// The supervisor over the task's command. A task's reversing
+    /// manoeuvres are planned on the map with the body's clearance; the
+    /// echoes kept from earlier scans guard the operator's jogs (a planned
+    /// reverse in a narrow room came nearer to them than the field's
+    /// margin, and its way stayed blocked).
     fn supervise(
         &mut self,
         now: Stamp,
@@ -767,7 +594,7 @@ impl Executive {
     ) -> DriveCommand {
         let verdict = self
             .supervisor
-            .check(cmd, inputs.obstacles, inputs.estimate, dt);
+            .check(cmd, inputs.obstacles, &[], inputs.estimate, dt);
         self.note_hazard(now, verdict.hazard);
         let safety = self.config.safety.clone();
         match verdict.hazard {
@@ -830,9 +657,26 @@ impl Executive {
         // to the next within the same tick.
         for _ in 0..8 {
             if self.active.is_none() {
-                let Some(next) = self.status.iter().position(|s| *s == TaskStatus::Pending) else {
-                    self.mode = MissionMode::Done;
-                    self.emit(now, EventKind::MissionDone);
+                let Some(next) = self.next_task(false) else {
+                    self.mode = match (self.closed.take(), &self.failure) {
+                        // The operator's tasks are over: back to how the
+                        // mission ended.
+                        (Some(closed), _) => closed,
+                        (None, Some(f)) => {
+                            let reason = f.to_string();
+                            self.emit(
+                                now,
+                                EventKind::MissionFailed {
+                                    reason: reason.clone(),
+                                },
+                            );
+                            MissionMode::Failed { reason }
+                        }
+                        (None, None) => {
+                            self.emit(now, EventKind::MissionDone);
+                            MissionMode::Done
+                        }
+                    };
                     return (DriveCommand::STOP, ended);
                 };
                 match self.start(now, next, est) {
