@@ -441,3 +441,32 @@ fn a_jog_stops_at_its_time_to_live_when_the_operator_is_gone() {
     // And nothing drove later.
     assert!(seen.iter().any(|s| s.stamp > last));
 }
+
+/// With a watcher connected to a robot (a peer with no endpoint of its
+/// own), an operator's session opened next does not wait for it: zenoh's
+/// gossip tells of the watcher, which cannot be reached, and opening
+/// waited the whole scouting delay (500 ms) for it before the first
+/// command could go out.
+#[test]
+fn a_watcher_connected_to_the_robot_does_not_hold_up_the_next_operator() {
+    let dir = tempfile::tempdir().unwrap();
+    let (robot, peer) = robot_on_socket(dir.path(), 1.0);
+    let watcher = Operator::connect(&peer, "watcher").unwrap();
+    let _states = watcher.states("r1").unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let mut opening = Vec::new();
+    for _ in 0..7 {
+        let t0 = std::time::Instant::now();
+        let mut op = Operator::connect(&peer, "ann").unwrap();
+        opening.push(t0.elapsed());
+        let r = op.send("r1", Command::Status, 10.0, None).unwrap();
+        assert_eq!(r.ack.reply, Reply::Done);
+    }
+    robot.stop();
+    // The scouting delay is a fixed 500 ms wait: an opening that waited it
+    // is no slow machine's doing.
+    assert!(
+        opening.iter().all(|t| *t < Duration::from_millis(450)),
+        "{opening:?}"
+    );
+}

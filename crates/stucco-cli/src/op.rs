@@ -46,6 +46,8 @@ pub struct BenchReport {
 impl Operator {
     /// Joins the network as `identity`.
     pub fn connect(link: &LinkConfig, identity: &str) -> Result<Self> {
+        stucco_link::operator_chunk(identity)
+            .map_err(|why| stucco_runtime::BadInput(format!("--as: {why}")))?;
         Ok(Operator {
             client: OperatorClient::new(stucco_link::open(link)?),
             identity: identity.to_owned(),

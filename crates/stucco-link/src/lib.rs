@@ -2,8 +2,12 @@
 //! knows zenoh.
 //!
 //! Key expressions, one robot named `NAME`:
-//! - `stucco/NAME/cmd`: a queryable; a query's payload is a
-//!   [`Telecommand`] as JSON, its reply the first [`Ack`] (JSON);
+//! - `stucco/NAME/cmd/OPERATOR`: a queryable (on `stucco/NAME/cmd/*`);
+//!   a query's payload is a [`Telecommand`] as JSON, its reply the first
+//!   [`Ack`] (JSON). The key's last chunk is the operator sending it: with
+//!   zenoh's access control each authenticated user may query only their
+//!   own key, so the robot knows who sent a command, and refuses one whose
+//!   `operator` field names someone else;
 //! - `stucco/NAME/acks`: every reply, published (the later `done` or
 //!   `failed` of an accepted command too);
 //! - `stucco/NAME/state`, `stucco/NAME/events`: the robot's state and its
@@ -58,6 +62,25 @@ pub type Subscription = Subscriber<RingChannelHandler<Sample>>;
 /// robot's publishing: measured, a state feed left unread for a minute
 /// slowed the robot's loop to a sixtieth of its pace).
 pub const WATCH_CAPACITY: usize = 1024;
+
+/// Why `name` cannot be an operator's name in a key (`stucco/NAME/cmd/
+/// OPERATOR`), if it cannot: a single key chunk of letters, digits, `-`,
+/// `_`, `.` and `@`, at most 64 bytes.
+pub fn operator_chunk(name: &str) -> Result<(), String> {
+    let ok = !name.is_empty()
+        && name.len() <= 64
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '@'));
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "operator {name:?}: 1 to 64 letters, digits, '-', '_', '.' or '@' (it is a key \
+             chunk, and the user name zenoh authenticates)"
+        ))
+    }
+}
 
 /// The largest telecommand taken, bytes (a query's payload): larger ones
 /// are refused unread.
@@ -114,9 +137,13 @@ fn z(e: impl std::fmt::Display) -> LinkError {
 
 /// The key expressions of robot `name`.
 pub mod keys {
-    /// Commands (queryable).
+    /// Commands from every operator (the robot's queryable).
     pub fn cmd(name: &str) -> String {
-        format!("stucco/{name}/cmd")
+        format!("stucco/{name}/cmd/*")
+    }
+    /// Commands from `operator` (a key chunk: see [`super::operator_chunk`]).
+    pub fn command(name: &str, operator: &str) -> String {
+        format!("stucco/{name}/cmd/{operator}")
     }
     /// Every reply.
     pub fn acks(name: &str) -> String {
@@ -200,6 +227,14 @@ pub fn open(cfg: &LinkConfig) -> Result<Session, LinkError> {
         c.insert_json5("mode", mode).map_err(z)?;
     }
     c.insert_json5("scouting/multicast/enabled", "false")
+        .map_err(z)?;
+    // Opening does not wait for the peers gossip tells of: a watcher
+    // connected to a robot (a peer with no endpoint of its own) cannot be
+    // reached, and each session opened after it waited the whole scouting
+    // delay (500 ms) for it before its first command could go out. (What
+    // a session asks first waits instead for a robot to answer it: see
+    // `OperatorClient::send` and `list`.)
+    c.insert_json5("open/return_conditions/connect_scouted", "false")
         .map_err(z)?;
     let list = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".to_owned());
     if !cfg.listen.is_empty() || cfg.config_file.is_none() {
@@ -289,6 +324,8 @@ pub struct RobotLink {
     heartbeat: Publisher<'static>,
     operators: Subscriber<FifoChannelHandler<Sample>>,
     denials: Receiver<Denial>,
+    /// Commands refused for naming another operator than their key's.
+    impostors: Vec<Denial>,
 }
 
 impl RobotLink {
@@ -341,6 +378,7 @@ impl RobotLink {
                 .wait()
                 .map_err(z)?,
             denials: audit::listen(format!("stucco/{name}/")),
+            impostors: Vec::new(),
         })
     }
 
@@ -348,7 +386,9 @@ impl RobotLink {
     /// last call (seen only where [`audit::layer`] is part of the process's
     /// tracing subscriber).
     pub fn denials(&mut self) -> Vec<Denial> {
-        self.denials.try_iter().collect()
+        let mut out = std::mem::take(&mut self.impostors);
+        out.extend(self.denials.try_iter());
+        out
     }
 
     /// True when an operator's heartbeat came since the last call.
@@ -394,6 +434,35 @@ impl RobotLink {
                 }
                 serde_json::from_slice::<Telecommand>(&p.to_bytes()).map_err(|e| e.to_string())
             });
+        // The key's last chunk: who sent it (the identity zenoh's access
+        // control lets query that key).
+        let sender = q
+            .key_expr()
+            .as_str()
+            .rsplit('/')
+            .next()
+            .unwrap_or_default()
+            .to_owned();
+        let parsed = parsed.and_then(|t| {
+            if t.operator == sender {
+                Ok(t)
+            } else {
+                let claimed: String = t.operator.chars().take(64).collect();
+                let denial = Denial {
+                    zid: String::new(),
+                    subject: sender.clone(),
+                    action: format!("Command claiming operator {claimed:?}"),
+                    key: q.key_expr().as_str().to_owned(),
+                };
+                tracing::warn!(robot = %self.name, "{denial}");
+                self.impostors.push(denial);
+                Err(format!(
+                    "operator: the command names {claimed:?} but was sent as {sender:?} (its key \
+                     {})",
+                    q.key_expr()
+                ))
+            }
+        });
         match parsed {
             Ok(t) => {
                 self.pending.push((t.id.clone(), q));
@@ -503,20 +572,30 @@ impl OperatorClient {
         give_up: Instant,
     ) -> Result<Ack, LinkError> {
         let json = serde_json::to_vec(t).map_err(z)?;
-        let key = keys::cmd(robot);
+        operator_chunk(&t.operator).map_err(|why| LinkError::Malformed {
+            key: keys::cmd(robot),
+            why,
+        })?;
+        let key = keys::command(robot, &t.operator);
+        // The first try goes out once the robot's queryable is known (a
+        // session just opened may not have heard of it yet), or after a
+        // retry's period without.
+        let querier = self
+            .session
+            .declare_querier(&key)
+            .timeout(give_up.saturating_duration_since(Instant::now()))
+            .wait()
+            .map_err(z)?;
+        let known_by = (Instant::now() + retry).min(give_up);
+        while !querier.matching_status().wait().map_err(z)?.matching() && Instant::now() < known_by
+        {
+            std::thread::sleep(Duration::from_millis(1));
+        }
         let mut tries = Vec::new();
         let mut next_try = Instant::now();
         while Instant::now() < give_up {
             if Instant::now() >= next_try {
-                let left = give_up.saturating_duration_since(Instant::now());
-                tries.push(
-                    self.session
-                        .get(&key)
-                        .payload(json.clone())
-                        .timeout(left)
-                        .wait()
-                        .map_err(z)?,
-                );
+                tries.push(querier.get().payload(json.clone()).wait().map_err(z)?);
                 next_try = Instant::now() + retry;
             }
             for replies in &tries {
@@ -577,15 +656,25 @@ impl OperatorClient {
 
     /// The robots that answer within `timeout`.
     pub fn list(&self, timeout: Duration) -> Result<Vec<String>, LinkError> {
-        // Every robot's queryable, every reply.
-        let replies = self
+        // Every robot's queryable, every reply: asked once one is known (a
+        // session just opened may not have heard of any yet), or after half
+        // the time given.
+        let until = Instant::now() + timeout;
+        let querier = self
             .session
-            .get("stucco/*/info")
+            .declare_querier("stucco/*/info")
             .target(zenoh::query::QueryTarget::All)
             .consolidation(zenoh::query::ConsolidationMode::None)
             .timeout(timeout)
             .wait()
             .map_err(z)?;
+        let known_by = Instant::now() + timeout / 2;
+        while !querier.matching_status().wait().map_err(z)?.matching() && Instant::now() < known_by
+        {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let replies = querier.get().wait().map_err(z)?;
+        let timeout = until.saturating_duration_since(Instant::now());
         let mut names = Vec::new();
         while let Ok(Some(reply)) = replies.recv_timeout(timeout) {
             if let Ok(s) = reply.result()
@@ -619,8 +708,8 @@ pub struct Faults {
     pub duplication: f64,
 }
 
-/// A bad link for tests: it carries `stucco/FROM/cmd` queries to
-/// `stucco/TO/cmd` and their replies back, delaying, losing, duplicating
+/// A bad link for tests: it carries `stucco/FROM/cmd/OPERATOR` queries to
+/// `stucco/TO/cmd/OPERATOR` and their replies back, delaying, losing, duplicating
 /// (and so reordering) them, and relays `TO`'s state as `FROM`'s. It stops
 /// when dropped.
 pub struct FaultyRelay {
@@ -686,8 +775,9 @@ impl FaultyRelay {
                             .payload()
                             .map(|p| p.to_bytes().into_owned())
                             .unwrap_or_default();
+                        let operator = q.key_expr().as_str().rsplit('/').next().unwrap_or("");
                         let Ok(replies) = session
-                            .get(keys::cmd(&to))
+                            .get(keys::command(&to, operator))
                             .payload(payload)
                             .timeout(Duration::from_secs(3))
                             .wait()

@@ -8,14 +8,19 @@ use stucco_core::{Ack, Reply, Stamp};
 use stucco_link::{LinkConfig, RobotLink, keys, open};
 use zenoh::Wait;
 
-/// The robot's reason for refusing `payload` sent to `stucco/r1/cmd`
-/// (nothing may reach the executive).
+/// The robot's reason for refusing `payload` sent by `ann` to
+/// `stucco/r1/cmd/ann` (nothing may reach the executive), and what the
+/// robot logged of it.
 fn refusal(payload: Vec<u8>) -> String {
+    refusal_logged(payload).0
+}
+
+fn refusal_logged(payload: Vec<u8>) -> (String, Vec<stucco_link::Denial>) {
     // One session with no endpoints delivers to itself.
     let session = open(&LinkConfig::default()).unwrap();
     let mut robot = RobotLink::new(&session, "r1").unwrap();
     let replies = session
-        .get(keys::cmd("r1"))
+        .get(keys::command("r1", "ann"))
         .payload(payload)
         .timeout(Duration::from_secs(2))
         .wait()
@@ -33,7 +38,7 @@ fn refusal(payload: Vec<u8>) -> String {
             };
             assert!(taken.is_empty());
             assert!(ack.id.is_empty());
-            return reason;
+            return (reason, robot.denials());
         }
     }
     panic!("no reply to a malformed command");
@@ -60,4 +65,21 @@ fn an_oversized_command_is_refused_unread() {
     let reason = refusal(huge.into_bytes());
     assert!(reason.contains("at most 4096"), "{reason}");
     assert!(reason.len() < 200, "{} bytes", reason.len());
+}
+
+/// A command sent by `ann` (on her key) that names `vic` as its operator
+/// is refused, and the robot keeps who tried and whom they claimed to be.
+#[test]
+fn a_command_claiming_another_operator_is_refused_and_logged() {
+    let (reason, logged) = refusal_logged(
+        br#"{"id": "c1", "operator": "vic", "issued": 0, "deadline": 1000000000, "command": {"type": "status"}}"#
+            .to_vec(),
+    );
+    assert!(
+        reason.contains("names \"vic\" but was sent as \"ann\""),
+        "{reason}"
+    );
+    assert_eq!(logged.len(), 1, "{logged:?}");
+    assert_eq!(logged[0].subject, "ann");
+    assert!(logged[0].action.contains("vic"), "{:?}", logged[0]);
 }
