@@ -82,6 +82,15 @@ pub fn operator_chunk(name: &str) -> Result<(), String> {
     }
 }
 
+/// Waits until `querier` has a queryable to answer it, or `until`: a
+/// session just opened may not have heard of the robot's yet.
+fn answerable(querier: &zenoh::query::Querier<'_>, until: Instant) -> Result<(), LinkError> {
+    while !querier.matching_status().wait().map_err(z)?.matching() && Instant::now() < until {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    Ok(())
+}
+
 /// The largest telecommand taken, bytes (a query's payload): larger ones
 /// are refused unread.
 pub const MAX_COMMAND_BYTES: usize = 4096;
@@ -586,11 +595,7 @@ impl OperatorClient {
             .timeout(give_up.saturating_duration_since(Instant::now()))
             .wait()
             .map_err(z)?;
-        let known_by = (Instant::now() + retry).min(give_up);
-        while !querier.matching_status().wait().map_err(z)?.matching() && Instant::now() < known_by
-        {
-            std::thread::sleep(Duration::from_millis(1));
-        }
+        answerable(&querier, (Instant::now() + retry).min(give_up))?;
         let mut tries = Vec::new();
         let mut next_try = Instant::now();
         while Instant::now() < give_up {
@@ -668,11 +673,7 @@ impl OperatorClient {
             .timeout(timeout)
             .wait()
             .map_err(z)?;
-        let known_by = Instant::now() + timeout / 2;
-        while !querier.matching_status().wait().map_err(z)?.matching() && Instant::now() < known_by
-        {
-            std::thread::sleep(Duration::from_millis(1));
-        }
+        answerable(&querier, Instant::now() + timeout / 2)?;
         let replies = querier.get().wait().map_err(z)?;
         let timeout = until.saturating_duration_since(Instant::now());
         let mut names = Vec::new();
