@@ -13,6 +13,7 @@
 //!   MCAP and replay it through the executive.
 //! - [`run_study`]: the `stucco study` job: the sensor-precision paper's
 //!   de-featured lasers and scanner comparison ([`Study`]).
+//! - [`bench_stop`], [`bench_commands`]: the operator link's figures.
 //! - [`run_robot`]: the `stucco robot` process (the executive and the
 //!   simulator paced to the wall clock, on zenoh); [`Operator`]: the
 //!   `stucco op` console.
@@ -21,6 +22,7 @@
 mod carmen;
 mod experiments;
 mod floor;
+mod link_bench;
 mod log_replay;
 mod logging;
 mod op;
@@ -40,6 +42,10 @@ mod walls;
 pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
 pub use floor::{FloorRun, map_floor};
+pub use link_bench::{
+    CommandsBenchJob, CommandsBenchReport, StopBenchJob, StopBenchReport, bench_commands,
+    bench_stop,
+};
 pub use log_replay::{
     LogReplayJob, LogReplayReport, OdomNoise, OdometrySource, OdometryTrust, RPE_PAIR_DISTANCE_M,
     Reference, run_log_replay,

@@ -245,6 +245,13 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The operator link's figures (`stucco bench stop`, `stucco bench
+    /// commands`).
+    Bench {
+        /// What to measure.
+        #[command(subcommand)]
+        action: BenchAction,
+    },
     /// Run the simulator with one robot driving its world's tour and report
     /// the real-time factor and a hash of every sensor reading.
     Simbench {
@@ -426,6 +433,53 @@ enum OpAction {
         #[arg(long, default_value_t = 1000)]
         count: usize,
     },
+    /// Subscribe to everything the robot publishes and never read it (a
+    /// client that froze): for tests and `stucco bench stop`.
+    #[command(hide = true)]
+    Stall,
+}
+
+/// What `stucco bench` measures.
+#[derive(Subcommand, Clone, Debug)]
+enum BenchAction {
+    /// Stop → zero velocity: a robot on loopback jogs and is stopped, again
+    /// and again, while another operator sends it other commands and a
+    /// client that froze (a `stucco` process of its own) subscribes to
+    /// everything it publishes.
+    Stop {
+        /// The robot's mission.
+        #[arg(long, default_value = "missions/robot.toml")]
+        mission: PathBuf,
+        /// Stops to time.
+        #[arg(long, default_value_t = 200)]
+        stops: usize,
+        /// Other commands a second.
+        #[arg(long, default_value_t = 1000.0)]
+        other_per_s: f64,
+        /// Without the client that froze.
+        #[arg(long)]
+        no_frozen_client: bool,
+        /// Print the report as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Memory over many commands: a robot on loopback takes N status
+    /// commands, each with its own id, and this process's resident memory
+    /// is read at every tenth.
+    Commands {
+        /// The robot's mission.
+        #[arg(long, default_value = "missions/robot.toml")]
+        mission: PathBuf,
+        /// Commands to send.
+        #[arg(long, default_value_t = 1_000_000)]
+        count: u64,
+        /// Their rate, per second.
+        #[arg(long, default_value_t = 5000.0)]
+        per_s: f64,
+        /// Print the report as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn parse_surface(s: &str) -> Result<SurfaceId, String> {
@@ -458,6 +512,80 @@ fn parse_region(s: &str) -> Result<stucco_core::Region, String> {
 fn parse_wall(s: &str) -> Result<WallName, String> {
     serde_json::from_value(serde_json::Value::String(s.to_owned()))
         .map_err(|_| format!("{s}: one of west, south, east, north"))
+}
+
+/// `stucco bench`.
+fn bench(action: BenchAction) -> ExitCode {
+    match action {
+        BenchAction::Stop {
+            mission,
+            stops,
+            other_per_s,
+            no_frozen_client,
+            json,
+        } => {
+            let frozen_client = if no_frozen_client {
+                None
+            } else {
+                match std::env::current_exe() {
+                    Ok(exe) => Some(exe),
+                    Err(e) => return fail(&anyhow::anyhow!("finding this program: {e}")),
+                }
+            };
+            match stucco_cli::bench_stop(&stucco_cli::StopBenchJob {
+                mission,
+                stops,
+                flood_per_s: other_per_s,
+                frozen_client,
+            }) {
+                Ok(r) if json => print_json(&r),
+                Ok(r) => {
+                    println!(
+                        "{} stops, {} other commands at {:.0}/s{}: stop sent → a state showing the drive at zero received in {:.1} ms (median), {:.1} ms (p99), {:.1} ms at most; zero from control period {} after the stop at the latest",
+                        r.stops,
+                        r.other_commands,
+                        r.other_commands_per_s,
+                        if r.frozen_client {
+                            ", a client that froze subscribed"
+                        } else {
+                            ""
+                        },
+                        r.stop_to_zero_ms_p50,
+                        r.stop_to_zero_ms_p99,
+                        r.stop_to_zero_ms_max,
+                        r.periods_to_zero_max
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(&e),
+            }
+        }
+        BenchAction::Commands {
+            mission,
+            count,
+            per_s,
+            json,
+        } => match stucco_cli::bench_commands(&stucco_cli::CommandsBenchJob {
+            mission,
+            count,
+            per_s,
+        }) {
+            Ok(r) if json => print_json(&r),
+            Ok(r) => {
+                println!(
+                    "{} commands at {:.0}/s: resident memory {:.1} MB after a tenth, {:.1} MB at the end ({:+.1} MB), {:.1} MB at most",
+                    r.commands,
+                    r.per_s,
+                    r.rss_at_tenth_mb,
+                    r.rss_at_end_mb,
+                    r.rss_at_end_mb - r.rss_at_tenth_mb,
+                    r.rss_max_mb
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => fail(&e),
+        },
+    }
 }
 
 /// `stucco op`.
@@ -508,6 +636,12 @@ fn op(
                     );
                     ExitCode::SUCCESS
                 }
+                Err(e) => fail(&e),
+            };
+        }
+        OpAction::Stall => {
+            return match operator.stall(&target) {
+                Ok(()) => ExitCode::SUCCESS,
                 Err(e) => fail(&e),
             };
         }
@@ -1229,6 +1363,7 @@ fn main() -> ExitCode {
             },
             json,
         ),
+        Command::Bench { action } => bench(action),
         Command::Simbench {
             world,
             seed,

@@ -104,8 +104,7 @@ impl Operator {
         let t = self.telecommand(now, deadline_s, command);
         // Listen before sending: the end may come right after the reply.
         let acks = self.client.acks(robot)?;
-        let give_up = Instant::now() + Duration::from_secs_f64(deadline_s.clamp(1.0, 60.0));
-        let ack = self.client.send(robot, &t, RETRY, give_up)?;
+        let ack = self.send_telecommand(robot, &t, deadline_s)?;
         let mut last = None;
         if let Some(limit) = wait
             && ack.reply == Reply::Accepted
@@ -128,6 +127,48 @@ impl Operator {
             }
         }
         Ok(CommandResult { ack, last })
+    }
+
+    /// Sends `command` to `robot`, issued at `now` on the robot's clock
+    /// (from a state the caller has at hand) and valid `deadline_s` from
+    /// then; returns its first reply.
+    pub fn send_at(
+        &mut self,
+        robot: &str,
+        now: Stamp,
+        command: Command,
+        deadline_s: f64,
+    ) -> Result<Ack> {
+        let t = self.telecommand(now, deadline_s, command);
+        self.send_telecommand(robot, &t, deadline_s)
+    }
+
+    fn send_telecommand(&self, robot: &str, t: &Telecommand, deadline_s: f64) -> Result<Ack> {
+        let give_up = Instant::now() + Duration::from_secs_f64(deadline_s.clamp(1.0, 60.0));
+        Ok(self.client.send(robot, t, RETRY, give_up)?)
+    }
+
+    /// Sends `command` to `robot` once, issued at `now` on the robot's
+    /// clock, and does not wait for its reply: traffic for benches.
+    pub fn post(
+        &mut self,
+        robot: &str,
+        now: Stamp,
+        command: Command,
+        deadline_s: f64,
+    ) -> Result<()> {
+        let t = self.telecommand(now, deadline_s, command);
+        Ok(self.client.post(robot, &t)?)
+    }
+
+    /// Subscribes to everything `robot` publishes and never reads it (a
+    /// client that froze), until the process ends: for benches and tests,
+    /// in a process of its own.
+    pub fn stall(&self, robot: &str) -> Result<()> {
+        let _frozen = self.client.stall(robot)?;
+        loop {
+            std::thread::park();
+        }
     }
 
     /// Sends `count` status queries one after another and measures each

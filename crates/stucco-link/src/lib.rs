@@ -35,10 +35,12 @@
 //! [`audit`]: [`RobotLink::denials`].
 
 pub mod audit;
+mod outbox;
 pub mod platform;
 pub mod scan;
 
 pub use audit::Denial;
+use outbox::{Outbox, Publishers, Topic};
 pub use platform::{PlatformServer, ZenohPlatform};
 pub use scan::{ScanDecodeError, ScanFrame};
 use serde::Serialize;
@@ -318,19 +320,22 @@ fn zenoh_fault(text: &str) -> (usize, usize, String) {
 }
 
 /// The robot's side: commands in, replies, state and events out.
+///
+/// Nothing here waits on the network: replies, and apart from them
+/// everything published, go through bounded queues to sending threads of
+/// their own (see [`RobotLink::dropped`]), so a congested link or a client
+/// that stopped reading never holds up the robot's loop.
 pub struct RobotLink {
     name: String,
     cmd: Queryable<FifoChannelHandler<Query>>,
-    info: Queryable<FifoChannelHandler<Query>>,
+    /// Answers `stucco op list` from zenoh's own thread.
+    _info: Queryable<()>,
     /// Queries waiting for the first reply to their command.
     pending: Vec<(String, Query)>,
-    acks: Publisher<'static>,
-    state: Publisher<'static>,
-    events: Publisher<'static>,
-    map: Publisher<'static>,
-    scan: Publisher<'static>,
-    coverage: Publisher<'static>,
-    heartbeat: Publisher<'static>,
+    /// Replies to queries (a querier's congestion control may hold them).
+    replies: Outbox,
+    /// What is published (dropped, never held, when a link congests).
+    telemetry: Outbox,
     operators: Subscriber<FifoChannelHandler<Sample>>,
     denials: Receiver<Denial>,
     /// Commands refused for naming another operator than their key's.
@@ -346,8 +351,8 @@ impl RobotLink {
         // Replies and events go first (their priority is above the
         // telemetry's) but, like everything the robot publishes, are
         // dropped rather than queued when a link is congested: a
-        // subscriber that stops reading must never hold up the robot's
-        // loop, and with it a stop. The record of what the robot did is
+        // subscriber that stops reading must never hold up the sending
+        // thread longer than it must. The record of what the robot did is
         // the job's events.jsonl on its disk.
         let record = |k: String| -> Result<Publisher<'static>, LinkError> {
             session
@@ -358,17 +363,7 @@ impl RobotLink {
                 .wait()
                 .map_err(z)
         };
-        Ok(RobotLink {
-            name: name.to_owned(),
-            cmd: session
-                .declare_queryable(keys::cmd(name))
-                .wait()
-                .map_err(z)?,
-            info: session
-                .declare_queryable(keys::info(name))
-                .wait()
-                .map_err(z)?,
-            pending: Vec::new(),
+        let publishers = Publishers {
             acks: record(keys::acks(name))?,
             state: publisher(keys::state(name))?,
             events: record(keys::events(name))?,
@@ -382,6 +377,28 @@ impl RobotLink {
                 .map_err(z)?,
             coverage: publisher(keys::coverage(name))?,
             heartbeat: publisher(keys::heartbeat(name))?,
+        };
+        let publishers = std::sync::Arc::new(publishers);
+        let replies = Outbox::start(name, "link-replies", publishers.clone()).map_err(z)?;
+        let telemetry = Outbox::start(name, "link-telemetry", publishers).map_err(z)?;
+        let info = {
+            let (sender, answer) = (replies.sender(), name.as_bytes().to_vec());
+            session
+                .declare_queryable(keys::info(name))
+                .callback(move |q| sender.reply(q, answer.clone()))
+                .wait()
+                .map_err(z)?
+        };
+        Ok(RobotLink {
+            name: name.to_owned(),
+            cmd: session
+                .declare_queryable(keys::cmd(name))
+                .wait()
+                .map_err(z)?,
+            _info: info,
+            pending: Vec::new(),
+            replies,
+            telemetry,
             operators: session
                 .declare_subscriber(keys::operator(name))
                 .wait()
@@ -389,6 +406,12 @@ impl RobotLink {
             denials: audit::listen(format!("stucco/{name}/")),
             impostors: Vec::new(),
         })
+    }
+
+    /// Replies and messages dropped so far because a sending thread had
+    /// fallen a whole queue behind (a link congested for several periods).
+    pub fn dropped(&self) -> u64 {
+        self.replies.dropped() + self.telemetry.dropped()
     }
 
     /// What zenoh's access control refused on this robot's keys since the
@@ -416,7 +439,6 @@ impl RobotLink {
         while let Ok(Some(q)) = self.cmd.try_recv() {
             self.accept_query(q, now, &mut out);
         }
-        self.serve_info();
         out
     }
 
@@ -486,15 +508,9 @@ impl RobotLink {
                     },
                 };
                 if let Ok(json) = serde_json::to_vec(&ack) {
-                    let _ = q.reply(q.key_expr().clone(), json).wait();
+                    self.replies.reply(q, json);
                 }
             }
-        }
-    }
-
-    fn serve_info(&mut self) {
-        while let Ok(Some(q)) = self.info.try_recv() {
-            let _ = q.reply(q.key_expr().clone(), self.name.clone()).wait();
         }
     }
 
@@ -508,53 +524,50 @@ impl RobotLink {
                 .partition(|(id, _)| *id == a.id);
             self.pending = rest;
             for (_, q) in answered {
-                q.reply(q.key_expr().clone(), json.clone())
-                    .wait()
-                    .map_err(z)?;
+                self.replies.reply(q, json.clone());
             }
-            self.acks.put(json).wait().map_err(z)?;
+            self.telemetry.put(Topic::Acks, json);
         }
         Ok(())
     }
 
     /// Publishes the robot's state.
     pub fn publish_state(&self, state: &impl Serialize) -> Result<(), LinkError> {
-        let json = serde_json::to_vec(state).map_err(z)?;
-        self.state.put(json).wait().map_err(z)
+        self.put_json(Topic::State, state)
     }
 
     /// Publishes what the robot has perceived.
     pub fn publish_map(&self, map: &impl Serialize) -> Result<(), LinkError> {
-        let json = serde_json::to_vec(map).map_err(z)?;
-        self.map.put(json).wait().map_err(z)
+        self.put_json(Topic::Map, map)
     }
 
     /// Publishes a scan.
     pub fn publish_scan(&self, scan: &ScanFrame) -> Result<(), LinkError> {
-        self.scan.put(scan.encode()).wait().map_err(z)
+        self.telemetry.put(Topic::Scan, scan.encode());
+        Ok(())
     }
 
     /// Publishes the plastering progress.
     pub fn publish_coverage(&self, coverage: &impl Serialize) -> Result<(), LinkError> {
-        let json = serde_json::to_vec(coverage).map_err(z)?;
-        self.coverage.put(json).wait().map_err(z)
+        self.put_json(Topic::Coverage, coverage)
     }
 
     /// Publishes events.
     pub fn publish_events<E: Serialize>(&self, events: &[E]) -> Result<(), LinkError> {
-        for e in events {
-            let json = serde_json::to_vec(e).map_err(z)?;
-            self.events.put(json).wait().map_err(z)?;
-        }
-        Ok(())
+        events
+            .iter()
+            .try_for_each(|e| self.put_json(Topic::Events, e))
     }
 
     /// Publishes the heartbeat.
     pub fn heartbeat(&self, now: Stamp) -> Result<(), LinkError> {
-        self.heartbeat
-            .put(serde_json::to_vec(&now).map_err(z)?)
-            .wait()
-            .map_err(z)
+        self.put_json(Topic::Heartbeat, &now)
+    }
+
+    fn put_json(&self, topic: Topic, message: &impl Serialize) -> Result<(), LinkError> {
+        self.telemetry
+            .put(topic, serde_json::to_vec(message).map_err(z)?);
+        Ok(())
     }
 }
 
@@ -634,6 +647,34 @@ impl OperatorClient {
             robot: robot.to_owned(),
             tries: tries.len(),
         })
+    }
+
+    /// Sends `t` to `robot` once and does not wait for its reply (which
+    /// is dropped when it comes): traffic for benches and tests.
+    pub fn post(&self, robot: &str, t: &Telecommand) -> Result<(), LinkError> {
+        let json = serde_json::to_vec(t).map_err(z)?;
+        self.session
+            .get(keys::command(robot, &t.operator))
+            .payload(json)
+            .callback(|_| {})
+            .wait()
+            .map_err(z)
+    }
+
+    /// A client that stopped reading, for tests and benches: a subscriber
+    /// to everything `robot` publishes whose callback never returns. It
+    /// holds up this process's zenoh delivery for good (run it in a process
+    /// of its own), and the robot's link to it congests.
+    pub fn stall(&self, robot: &str) -> Result<Subscriber<()>, LinkError> {
+        self.session
+            .declare_subscriber(format!("stucco/{robot}/**"))
+            .callback(|_| {
+                loop {
+                    std::thread::park();
+                }
+            })
+            .wait()
+            .map_err(z)
     }
 
     /// Publishes one heartbeat of operator `identity` to `robot`.
