@@ -37,6 +37,8 @@ struct Site<'a> {
     peer: &'a dyn Fn(&str) -> String,
     /// How zenoh names user `ann`'s or `vic`'s subject, e.g. `Username(vic)`.
     subject: &'a dyn Fn(&str) -> String,
+    /// What the robot's log says of an outsider refused at joining.
+    refused_at_joining: &'a str,
 }
 
 impl Site<'_> {
@@ -110,6 +112,21 @@ impl Site<'_> {
         // The robot knows who tried: every refusal of the viewer's
         // commands is logged and kept, naming the viewer.
         let run = robot.stop();
+        // And who was refused at joining (the tests share a process: each
+        // robot hears every refusal, so each test looks for its own kind).
+        let joins: Vec<_> = run
+            .denials
+            .iter()
+            .filter(|d| d.action.starts_with("Join"))
+            .collect();
+        println!("refused at joining: {joins:?}");
+        assert!(
+            joins
+                .iter()
+                .any(|d| d.action.contains(self.refused_at_joining)),
+            "no outsider's refusal logged: {:?}",
+            run.denials
+        );
         let refused: Vec<_> = run
             .denials
             .iter()
@@ -178,6 +195,7 @@ fn only_operators_may_command_viewers_may_watch() {
         connect: endpoint,
         peer: &peer,
         subject: &|user| format!("Username({user})"),
+        refused_at_joining: "wrong password",
     }
     .check(["ann:change-me-too", "vic:vic-secret"], &["ann:guess"]);
 }
@@ -299,6 +317,7 @@ fn with_tls_certificates_only_operators_may_command() {
         connect: format!("tls/localhost:{port}"),
         peer: &peer,
         subject: &|cn| format!("CertCommonName({cn})"),
+        refused_at_joining: "TLS",
     }
     .check(["ann", "vic"], &["stranger:ann", "no-certificate"]);
 }

@@ -11,6 +11,15 @@
 //! key (later ones are answered from its cache with the zenoh id alone), so
 //! the layer remembers each zenoh id's subject from the decisions that name
 //! it.
+//!
+//! A session refused at joining (a wrong password, an unknown user, a
+//! certificate no authority of the site signed, none at all) is read from
+//! zenoh's log too and handed to every robot of the process, with what
+//! zenoh tells of it: the reason, and the address the attempt came from
+//! when zenoh names it (a user/password handshake's link, when it was the
+//! only one joining at the time; a TLS handshake fails before zenoh names
+//! its link, and zenoh 1.10 never logs the user name a wrong password was
+//! tried for).
 
 use serde::Serialize;
 use std::collections::VecDeque;
@@ -24,6 +33,14 @@ use tracing_subscriber::layer::Context;
 
 /// The module of zenoh whose log carries the access-control decisions.
 pub const ACL_TARGET: &str = "zenoh::net::routing::interceptor::access_control";
+/// The module of zenoh that logs each link it begins to accept.
+const MANAGER_TARGET: &str = "zenoh_transport::unicast::manager";
+/// The module of zenoh that logs why a joining session was refused.
+const ACCEPT_TARGET: &str = "zenoh_transport::unicast::establishment::accept";
+/// The module of zenoh that logs a TLS handshake that failed.
+const TLS_TARGET: &str = "zenoh_link_tls::unicast";
+/// Links being accepted that are remembered.
+const JOINING_KEPT: usize = 64;
 
 /// A message zenoh's access control refused.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
@@ -35,9 +52,10 @@ pub struct Denial {
     /// zenoh id that matched a configured subject, joined by `+`; empty if
     /// zenoh has not named it yet.
     pub subject: String,
-    /// What it tried, e.g. `Query (ingress)`.
+    /// What it tried, e.g. `Query (ingress)`, or `Join (wrong password)`
+    /// for a session refused at joining.
     pub action: String,
-    /// On which key expression.
+    /// On which key expression (empty for a session refused at joining).
     pub key: String,
 }
 
@@ -48,8 +66,33 @@ impl std::fmt::Display for Denial {
         } else {
             &self.subject
         };
-        write!(f, "refused {} on {} from {who}", self.action, self.key)
+        match (self.key.is_empty(), who.is_empty()) {
+            (false, _) => write!(f, "refused {} on {} from {who}", self.action, self.key),
+            (true, false) => write!(f, "refused {} from {who}", self.action),
+            (true, true) => write!(
+                f,
+                "refused {} (from an address zenoh does not name)",
+                self.action
+            ),
+        }
     }
+}
+
+/// Why zenoh refused a session at joining, read from its log.
+fn join_refusal(target: &str, message: &str) -> Option<String> {
+    if target == ACCEPT_TARGET && message.contains("UsrPwd") {
+        if message.contains("Invalid user") {
+            return Some("Join (unknown user)".to_owned());
+        }
+        if message.contains("Invalid password") {
+            return Some("Join (wrong password)".to_owned());
+        }
+    }
+    if target == TLS_TARGET {
+        let why = message.strip_suffix(". Hint: increase the system open file limit.")?;
+        return Some(format!("Join (TLS: {why})"));
+    }
+    None
 }
 
 /// One access-control decision as zenoh logs it.
@@ -101,6 +144,9 @@ struct Registry {
     /// at most [`SUBJECTS_KEPT`], so a robot that sees many short operator
     /// sessions keeps a bounded memory.
     subjects: VecDeque<(String, String)>,
+    /// The links zenoh has begun to accept and not yet accepted (`SRC =>
+    /// DST`), oldest first; at most [`JOINING_KEPT`].
+    joining: VecDeque<String>,
 }
 
 /// Zenoh ids whose subject is remembered.
@@ -118,6 +164,33 @@ impl Registry {
         }
     }
 
+    /// Reads zenoh's log of the links it accepts.
+    fn link_news(&mut self, target: &str, message: &str) {
+        if target == MANAGER_TARGET {
+            if let Some(link) = message.strip_prefix("Accepting link... ") {
+                self.joining.push_back(link.to_owned());
+                while self.joining.len() > JOINING_KEPT {
+                    self.joining.pop_front();
+                }
+            } else if message.starts_with("Failed to accept link before deadline") {
+                self.joining.pop_front();
+            }
+        } else if target == ACCEPT_TARGET && message.starts_with("New transport link accepted") {
+            self.joining.retain(|link| !message.contains(link.as_str()));
+        }
+    }
+
+    /// The remote end of the link a refused session came on, when one link
+    /// only was being accepted (forgotten then).
+    fn refused_link(&mut self) -> String {
+        if self.joining.len() == 1 {
+            let link = self.joining.pop_front().unwrap_or_default();
+            link.rsplit(" => ").next().unwrap_or_default().to_owned()
+        } else {
+            String::new()
+        }
+    }
+
     fn subject_of(&self, zid: &str) -> Option<&str> {
         self.subjects
             .iter()
@@ -129,6 +202,7 @@ impl Registry {
 static REGISTRY: Mutex<Registry> = Mutex::new(Registry {
     sinks: Vec::new(),
     subjects: VecDeque::new(),
+    joining: VecDeque::new(),
 });
 
 /// Refusals on key expressions under `prefix` from now on.
@@ -162,12 +236,33 @@ fn record(d: &Decision<'_>) {
     });
 }
 
-/// The tracing layer that turns zenoh's access-control log into
-/// [`Denial`]s; add it to the process's subscriber (it enables zenoh's
-/// `trace` level for that one module only).
+/// Hands a session refused at joining to every robot.
+fn record_refusal(action: String) {
+    let Ok(mut r) = REGISTRY.lock() else {
+        return;
+    };
+    let denial = Denial {
+        zid: String::new(),
+        subject: r.refused_link(),
+        action,
+        key: String::new(),
+    };
+    r.sinks.retain(|(_, tx)| tx.send(denial.clone()).is_ok());
+}
+
+/// The tracing layer that turns zenoh's access-control log, and its log
+/// of sessions refused at joining, into [`Denial`]s; add it to the
+/// process's subscriber (it enables zenoh's `trace` level for the modules
+/// it reads only).
 pub fn layer<S: Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>>() -> impl Layer<S>
 {
-    AclLayer.with_filter(Targets::new().with_target(ACL_TARGET, Level::TRACE))
+    AclLayer.with_filter(
+        Targets::new()
+            .with_target(ACL_TARGET, Level::TRACE)
+            .with_target(MANAGER_TARGET, Level::TRACE)
+            .with_target(ACCEPT_TARGET, Level::DEBUG)
+            .with_target(TLS_TARGET, Level::WARN),
+    )
 }
 
 struct AclLayer;
@@ -176,8 +271,17 @@ impl<S: Subscriber> Layer<S> for AclLayer {
     fn on_event(&self, event: &Event<'_>, _ctx: Context<'_, S>) {
         let mut message = Message(String::new());
         event.record(&mut message);
-        if let Some(d) = decision(&message.0) {
-            record(&d);
+        let target = event.metadata().target();
+        if target == ACL_TARGET {
+            if let Some(d) = decision(&message.0) {
+                record(&d);
+            }
+            return;
+        }
+        if let Some(action) = join_refusal(target, &message.0) {
+            record_refusal(action);
+        } else if let Ok(mut r) = REGISTRY.lock() {
+            r.link_news(target, &message.0);
         }
     }
 }
@@ -201,6 +305,7 @@ mod tests {
         let mut r = Registry {
             sinks: Vec::new(),
             subjects: VecDeque::new(),
+            joining: VecDeque::new(),
         };
         for i in 0..SUBJECTS_KEPT + 10 {
             r.remember(&format!("z{i}"), &format!("user{i}"));
@@ -217,6 +322,59 @@ mod tests {
         r.remember("z-new", "vic");
         assert_eq!(r.subject_of("z20"), Some("ann"));
         assert_eq!(r.subjects.len(), SUBJECTS_KEPT);
+    }
+
+    #[test]
+    fn reads_sessions_refused_at_joining_and_where_they_came_from() {
+        assert_eq!(
+            join_refusal(
+                ACCEPT_TARGET,
+                "UsrPwd extension - Recv OpenSyn. Invalid password."
+            ),
+            Some("Join (wrong password)".to_owned())
+        );
+        assert_eq!(
+            join_refusal(
+                ACCEPT_TARGET,
+                "UsrPwd extension - Recv OpenSyn. Invalid user."
+            ),
+            Some("Join (unknown user)".to_owned())
+        );
+        assert_eq!(
+            join_refusal(
+                TLS_TARGET,
+                "invalid peer certificate: UnknownIssuer. Hint: increase the system open file limit."
+            ),
+            Some("Join (TLS: invalid peer certificate: UnknownIssuer)".to_owned())
+        );
+        assert_eq!(join_refusal(ACCEPT_TARGET, "Some other trouble"), None);
+        let mut r = Registry {
+            sinks: Vec::new(),
+            subjects: VecDeque::new(),
+            joining: VecDeque::new(),
+        };
+        // Two links joining, one accepted: the other is where a refusal came
+        // from.
+        r.link_news(
+            MANAGER_TARGET,
+            "Accepting link... tcp/10.0.0.2:7447 => tcp/10.0.0.9:51000",
+        );
+        r.link_news(
+            MANAGER_TARGET,
+            "Accepting link... tcp/10.0.0.2:7447 => tcp/10.0.0.7:40000",
+        );
+        assert_eq!(r.refused_link(), "", "two joining: which one is not known");
+        r.link_news(
+            ACCEPT_TARGET,
+            "New transport link accepted from 4f to 9a: tcp/10.0.0.2:7447 => tcp/10.0.0.9:51000 x",
+        );
+        assert_eq!(r.refused_link(), "tcp/10.0.0.7:40000");
+        assert!(r.joining.is_empty());
+        // Bounded, whatever comes.
+        for i in 0..JOINING_KEPT + 5 {
+            r.link_news(MANAGER_TARGET, &format!("Accepting link... a => b{i}"));
+        }
+        assert_eq!(r.joining.len(), JOINING_KEPT);
     }
 
     #[test]
