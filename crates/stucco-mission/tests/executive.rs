@@ -2795,3 +2795,57 @@ fn a_jog_backwards_stops_for_what_is_behind() {
         }
     }
 }
+
+/// A planned move backwards is guarded as a jog is: at the end of a wall
+/// pass the robot backs out along its standoff, and the echoes kept
+/// behind it (the laser looks ahead) hold it there until they are gone.
+#[test]
+fn a_planned_move_backwards_stops_for_what_is_behind() {
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(
+        vec![TaskSpec::FollowWall {
+            wall: WallName::South,
+            standoff_m: 0.6,
+            from_m: 3.0,
+            to_m: 4.0,
+            speed_mps: 0.25,
+        }],
+        true,
+    );
+    let backing = |exec: &Executive| {
+        matches!(
+            exec.current_behaviour(),
+            Some(BehaviourKind::Reverse { .. })
+        )
+    };
+    let mut k = 0;
+    while !backing(&exec) {
+        tick_with(&mut exec, &mut robot, &[]);
+        k += 1;
+        assert!(k < 6000, "no backing out in 120 s: {:?}", exec.mode());
+    }
+    // A box 0.15 m behind the body (its back is 0.15 m behind the rear
+    // axle): within the field.
+    let behind = [Point2::new(-0.3, 0.0), Point2::new(-0.3, 0.1)];
+    let at = robot.pose;
+    for _ in 0..100 {
+        let out = ask(
+            &mut exec,
+            &robot,
+            Seen {
+                unseen: &behind,
+                ..Seen::default()
+            },
+        );
+        assert!(out.drive.speed_mps >= 0.0, "{:?}", out.drive);
+        robot.drive(out.drive);
+    }
+    assert_eq!(exec.hazard(), Some(Hazard::Obstacle));
+    assert!((robot.pose.position() - at.position()).norm() < 0.01);
+    // Gone: it backs out.
+    let mut backed = false;
+    for _ in 0..100 {
+        backed |= tick_with(&mut exec, &mut robot, &[]).drive.speed_mps < 0.0;
+    }
+    assert!(backed, "{:?}", exec.current_behaviour());
+}

@@ -75,6 +75,11 @@ impl EchoMemory {
         &self.unseen
     }
 
+    /// Every echo kept, in the room frame.
+    pub fn kept(&self) -> impl Iterator<Item = Point2<f64>> + '_ {
+        self.cells.values().map(|(p, _)| *p)
+    }
+
     /// Echoes kept.
     pub fn len(&self) -> usize {
         self.cells.len()

@@ -592,9 +592,9 @@ impl Executive {
         dt: f64,
         checkpoint_due: &mut bool,
     ) -> DriveCommand {
-        let verdict = self
-            .supervisor
-            .check(cmd, inputs.obstacles, &[], inputs.estimate, dt);
+        let verdict =
+            self.supervisor
+                .check(cmd, inputs.obstacles, inputs.unseen, inputs.estimate, dt);
         self.note_hazard(now, verdict.hazard);
         let safety = self.config.safety.clone();
         match verdict.hazard {
