@@ -730,4 +730,18 @@ spray = { thickness_mm = 5.0, flow_l_per_min = 6.0 }
         assert!(e.starts_with("two-coats.toml:16:"), "{e}");
         assert!(e.contains("flow_l_per_min"), "{e}");
     }
+
+    #[test]
+    fn a_failure_policy_it_does_not_know_is_named_with_its_line() {
+        let text = format!("{TWO_COATS}\n[failsafe]\non_task_failure = \"carry_on\"\n");
+        let line = text.lines().count();
+        let e = Mission::parse(&text, Path::new("policy.toml"))
+            .expect_err("no such policy")
+            .to_string();
+        assert!(e.starts_with(&format!("policy.toml:{line}:")), "{e}");
+        assert!(e.contains("carry_on"), "{e}");
+        let text = format!("{TWO_COATS}\n[failsafe]\non_task_failure = \"continue\"\n");
+        let m = Mission::parse(&text, Path::new("policy.toml")).expect("a mission");
+        assert_eq!(m.failsafe.on_task_failure, crate::FailurePolicy::Continue);
+    }
 }
