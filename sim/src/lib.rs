@@ -28,11 +28,13 @@
 
 mod deposition;
 mod error;
+mod grid;
 mod layout;
 mod plane;
 mod scene;
 mod sensors;
 mod simulator;
+mod space;
 mod tour;
 mod trace;
 mod vehicle;
@@ -43,9 +45,10 @@ pub use error::SimError;
 pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, TrueWall};
 pub use plane::{PlaneCaster, ray_circle};
 pub use scene::Scene;
-pub use sensors::cast;
 pub use sensors::{FaultConfig, Interval, StuckEncoder};
+pub use sensors::{cast, cast_rapier};
 pub use simulator::{SimConfig, Simulator, Truth};
+pub use space::SpaceCaster;
 pub use stucco_core::{CameraSpec, TOOL_CAMERA};
 pub use tour::TourDriver;
 pub use trace::TraceHash;

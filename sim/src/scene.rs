@@ -42,17 +42,25 @@ pub struct Upright {
 impl Upright {
     /// Distance along the unit ray `o + s·d` to this cylinder, if hit.
     pub fn cast(&self, o: [f64; 3], d: [f64; 3]) -> Option<f64> {
+        let (wx, wy) = (self.at.x - o[0], self.at.y - o[1]);
+        let r2 = self.radius * self.radius;
+        // The ray's horizontal part, squared.
+        let h2 = d[0] * d[0] + d[1] * d[1];
         let mut best = f64::INFINITY;
-        // The side: a circle in the horizontal projection.
-        let h = d[0].hypot(d[1]);
-        if h > 1e-12 {
-            let dir = nalgebra::Vector2::new(d[0] / h, d[1] / h);
-            if let Some(s2) =
-                crate::plane::ray_circle(&Point2::new(o[0], o[1]), &dir, &self.at, self.radius)
-            {
-                let s = s2 / h;
+        if h2 > 1e-24 {
+            // In plan the ray's line passes wide of the circle: it meets
+            // neither the side nor the caps.
+            let cross = wx * d[1] - wy * d[0];
+            if cross * cross > r2 * h2 {
+                return None;
+            }
+            // The side: |o + s·d − at|² = r² in plan, the nearer root.
+            let proj = wx * d[0] + wy * d[1];
+            let disc = proj * proj - h2 * (wx * wx + wy * wy - r2);
+            if disc >= 0.0 {
+                let s = (proj - disc.sqrt()) / h2;
                 let z = o[2] + d[2] * s;
-                if (self.z[0]..=self.z[1]).contains(&z) {
+                if s > 1e-9 && (self.z[0]..=self.z[1]).contains(&z) {
                     best = s;
                 }
             }
@@ -63,7 +71,7 @@ impl Upright {
                 let s = (zc - o[2]) / d[2];
                 if s > 1e-9 && s < best {
                     let (x, y) = (o[0] + d[0] * s - self.at.x, o[1] + d[1] * s - self.at.y);
-                    if x * x + y * y <= self.radius * self.radius {
+                    if x * x + y * y <= r2 {
                         best = s;
                     }
                 }
@@ -128,6 +136,11 @@ impl Walker {
 pub struct Scene {
     /// The static colliders and their query structures.
     pub world: PhysicsWorld,
+    /// The same static solids for the cameras' rays.
+    pub space: crate::space::SpaceCaster,
+    /// The cameras cast through rapier, as before the [`SpaceCaster`]
+    /// (`crate::SpaceCaster`): a benchmark's baseline.
+    pub rapier_cameras: bool,
     /// The robot's footprint, for collision checks.
     pub robot_shape: Cuboid,
     /// Where the footprint's centre sits in the robot's frame, m.
@@ -209,6 +222,8 @@ impl Scene {
         world.step();
         let mut scene = Scene {
             world,
+            space: crate::space::SpaceCaster::new(layout),
+            rapier_cameras: false,
             robot_shape: Cuboid::new(v3(half[0], half[1], half[2])),
             robot_shape_offset: offset,
             walkers,

@@ -71,13 +71,31 @@ fn v3(x: f64, y: f64, z: f64) -> Vector {
 
 /// The first surface along a ray that returns the light: glass only near
 /// normal incidence; people where they are now. `None`: nothing within
-/// `max_m`.
+/// `max_m`. Cast through the scene's [`SpaceCaster`](crate::SpaceCaster).
 pub fn cast(scene: &Scene, origin: [f64; 3], dir: [f64; 3], max_m: f64) -> Option<f64> {
-    let person = scene
+    let person = nearest_person(scene, origin, dir);
+    let fixed = scene.space.cast(
+        origin,
+        dir,
+        max_m.min(person),
+        GLASS_MAX_INCIDENCE_RAD.cos(),
+    );
+    fixed.or(person.is_finite().then_some(person))
+}
+
+fn nearest_person(scene: &Scene, origin: [f64; 3], dir: [f64; 3]) -> f64 {
+    scene
         .bodies
         .iter()
         .filter_map(|b| b.cast(origin, dir))
-        .fold(f64::INFINITY, f64::min);
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// [`cast`] through rapier's query pipeline, as the cameras were cast
+/// until the [`SpaceCaster`](crate::SpaceCaster): kept to check it against
+/// and as the benches' baseline.
+pub fn cast_rapier(scene: &Scene, origin: [f64; 3], dir: [f64; 3], max_m: f64) -> Option<f64> {
+    let person = nearest_person(scene, origin, dir);
     let max_m = max_m.min(person);
     let mut from = 0.0;
     let mut skip: Option<ColliderHandle> = None;
@@ -359,7 +377,12 @@ impl CameraRig {
                 .iter()
                 .map(|&el| {
                     let dir = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
-                    match cast(scene, [at.x, at.y, origin_m[2]], dir, s.max_range_m) {
+                    let caster = if scene.rapier_cameras {
+                        cast_rapier
+                    } else {
+                        cast
+                    };
+                    match caster(scene, [at.x, at.y, origin_m[2]], dir, s.max_range_m) {
                         Some(r) => r + noise.map_or(0.0, |n| n.sample(rng)),
                         None => f64::INFINITY,
                     }

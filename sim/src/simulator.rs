@@ -199,6 +199,13 @@ impl Simulator {
         }
     }
 
+    /// Casts the cameras' rays through rapier's query pipeline, as the
+    /// simulator did before its own caster: the benchmarks' baseline (the
+    /// readings differ by rapier's f32 rounding).
+    pub fn cast_cameras_through_rapier(&mut self) {
+        self.scene.rapier_cameras = true;
+    }
+
     /// The true walls, openings and rooms.
     pub fn layout(&self) -> &Layout {
         &self.layout

@@ -263,6 +263,10 @@ enum Command {
         /// Simulated seconds to run.
         #[arg(long, default_value_t = 60.0)]
         sim_seconds: f64,
+        /// Run it again with the previous implementation (the cameras cast
+        /// through rapier) and print both.
+        #[arg(long)]
+        baseline: bool,
         /// Print the report as one JSON object on stdout.
         #[arg(long)]
         json: bool,
@@ -1368,11 +1372,13 @@ fn main() -> ExitCode {
             world,
             seed,
             sim_seconds,
+            baseline,
             json,
         } => match run_simbench(&SimbenchJob {
             world,
             seed,
             sim_seconds,
+            baseline,
         }) {
             Ok(report) if json => print_json(&report),
             Ok(r) => {
@@ -1389,6 +1395,16 @@ fn main() -> ExitCode {
                     r.bumps,
                     r.trace_hash
                 );
+                if let Some(b) = r.baseline {
+                    println!(
+                        "  baseline ({}): {:.2} s — {:.0}× real time; trace {}; {:.2}× faster now",
+                        b.implementation,
+                        b.wall_seconds,
+                        b.real_time_factor,
+                        b.trace_hash,
+                        b.speedup
+                    );
+                }
                 ExitCode::SUCCESS
             }
             Err(e) => {
