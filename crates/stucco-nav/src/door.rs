@@ -137,6 +137,12 @@ pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpen
     find_doors_moving(scan, &Twist2::default(), walls, cfg)
 }
 
+thread_local! {
+    /// The bearings of the scans this thread last searched for doors.
+    static BEARINGS: std::cell::RefCell<crate::points::Bearings> =
+        std::cell::RefCell::default();
+}
+
 /// [`find_doors`] for a laser moving with `twist` (its own frame) during
 /// the sweep, with `walls` in its frame at the scan's stamp (as the walls
 /// found in deskewed points are): each beam is cast from where the laser
@@ -148,14 +154,36 @@ pub fn find_doors_moving(
     walls: &[Wall],
     cfg: &DoorConfig,
 ) -> Vec<DoorOpening> {
-    // Each beam's origin and direction in the frame at the stamp.
-    let beams: Vec<(Vector2<f64>, Vector2<f64>)> = (0..scan.len())
-        .map(|i| {
-            let at = twist.displacement(scan.beam_time_s(i));
-            let phi = scan.angle(i) + at.theta;
-            (Vector2::new(at.x, at.y), Vector2::new(phi.cos(), phi.sin()))
+    let searched = |w: &Wall| {
+        w.points >= cfg.min_wall_points
+            && w.rms_residual_m <= cfg.max_wall_rms_sigmas * cfg.range_sigma_m
+    };
+    if !walls.iter().any(searched) {
+        return Vec::new();
+    }
+    // Each beam's origin and direction in the frame at the stamp (not
+    // turning, the laser keeps its heading: each beam's bearing's own sine
+    // and cosine, worked out once for scans of its geometry).
+    let beams: Vec<(Vector2<f64>, Vector2<f64>)> = if twist.omega_radps == 0.0 {
+        BEARINGS.with_borrow_mut(|b| {
+            b.of(scan)
+                .iter()
+                .enumerate()
+                .map(|(i, &(s, c))| {
+                    let at = twist.displacement(scan.beam_time_s(i));
+                    (Vector2::new(at.x, at.y), Vector2::new(c, s))
+                })
+                .collect()
         })
-        .collect();
+    } else {
+        (0..scan.len())
+            .map(|i| {
+                let at = twist.displacement(scan.beam_time_s(i));
+                let phi = scan.angle(i) + at.theta;
+                (Vector2::new(at.x, at.y), Vector2::new(phi.cos(), phi.sin()))
+            })
+            .collect()
+    };
     let mut doors = Vec::new();
     let gate = 3.0 * cfg.range_sigma_m;
     let mut run: Vec<Crossing> = Vec::new();
@@ -163,9 +191,7 @@ pub fn find_doors_moving(
     order.sort_by_key(|&w| std::cmp::Reverse(walls[w].points));
     for wi in order {
         let wall = &walls[wi];
-        if wall.points < cfg.min_wall_points
-            || wall.rms_residual_m > cfg.max_wall_rms_sigmas * cfg.range_sigma_m
-        {
+        if !searched(wall) {
             continue;
         }
         let n = wall.normal();

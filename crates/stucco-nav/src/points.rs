@@ -26,6 +26,34 @@ pub struct ScanPoint {
 pub struct ScanPoints {
     points: Vec<ScanPoint>,
     angle_increment_rad: f64,
+    bearings: Bearings,
+}
+
+/// The sines and cosines of a scan's bearings, worked out once for scans
+/// of the same geometry (first bearing, step, beams): the same numbers as
+/// each beam's own `sin_cos`, without its cost scan after scan.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Bearings {
+    key: (u64, u64, usize),
+    sin_cos: Vec<(f64, f64)>,
+}
+
+impl Bearings {
+    /// `(sin, cos)` of each of `scan`'s bearings, in beam order.
+    pub fn of(&mut self, scan: &Scan) -> &[(f64, f64)] {
+        let key = (
+            scan.angle_min_rad.to_bits(),
+            scan.angle_increment_rad.to_bits(),
+            scan.len(),
+        );
+        if key != self.key || self.sin_cos.len() != scan.len() {
+            self.key = key;
+            self.sin_cos.clear();
+            self.sin_cos
+                .extend((0..scan.len()).map(|i| scan.angle(i).sin_cos()));
+        }
+        &self.sin_cos
+    }
 }
 
 impl ScanPoints {
@@ -49,11 +77,16 @@ impl ScanPoints {
     pub fn fill(&mut self, scan: &Scan) {
         self.points.clear();
         self.angle_increment_rad = scan.angle_increment_rad.abs();
-        self.points.extend(scan.returns().map(|b| ScanPoint {
-            p: b.point(),
-            range_m: b.range_m,
-            bearing_rad: b.angle_rad,
-            beam: b.index,
+        let sin_cos = self.bearings.of(scan);
+        self.points.extend(scan.returns().map(|b| {
+            let (s, c) = sin_cos[b.index];
+            ScanPoint {
+                // As `b.point()` makes it.
+                p: Point2::new(b.range_m * c, b.range_m * s),
+                range_m: b.range_m,
+                bearing_rad: b.angle_rad,
+                beam: b.index,
+            }
         }));
     }
 
@@ -62,9 +95,11 @@ impl ScanPoints {
     pub fn fill_deskewed(&mut self, scan: &Scan, twist: &Twist2) {
         self.points.clear();
         self.angle_increment_rad = scan.angle_increment_rad.abs();
+        let sin_cos = self.bearings.of(scan);
         self.points.extend(scan.returns().map(|b| {
             let at_beam = twist.displacement(scan.beam_time_s(b.index));
-            let p = at_beam.transform_point(&b.point());
+            let (s, c) = sin_cos[b.index];
+            let p = at_beam.transform_point(&Point2::new(b.range_m * c, b.range_m * s));
             ScanPoint {
                 p,
                 range_m: b.range_m,
@@ -92,6 +127,7 @@ impl ScanPoints {
                 })
                 .collect(),
             angle_increment_rad: self.angle_increment_rad,
+            bearings: Bearings::default(),
         }
     }
 
