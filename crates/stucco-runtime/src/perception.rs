@@ -82,9 +82,18 @@ struct RoomView {
     ceiling_m: std::collections::VecDeque<f64>,
     /// Scan echoes off the walls, counted in cells of the room frame.
     floor: std::collections::BTreeMap<(i64, i64), u32>,
+    /// Cells of `floor` with [`FLOOR_HITS`] echoes or more: a count only
+    /// grows, so this changes exactly when the set of such cells does.
+    floor_occupied: usize,
+    /// The connected groups of those cells, as of `floor_occupied`: their
+    /// lowest and highest cells.
+    floor_groups: Option<(usize, Vec<FloorGroup>)>,
     /// What stands on the floor, as of the last scan.
     floor_boxes: Vec<Obstacle>,
 }
+
+/// A connected group of floor cells: its lowest and highest cells.
+type FloorGroup = ((i64, i64), (i64, i64));
 
 /// A door of the room filter: its width when measured, the door of the
 /// floor plan it is.
@@ -128,6 +137,8 @@ impl RoomView {
             tool_wall: None,
             ceiling_m: std::collections::VecDeque::new(),
             floor: std::collections::BTreeMap::new(),
+            floor_occupied: 0,
+            floor_groups: None,
             floor_boxes: Vec::new(),
         }
     }
@@ -255,9 +266,10 @@ impl Perception {
         Some(v[v.len() / 2])
     }
 
-    /// What stands on the floor: boxes around the cells where scans kept
-    /// finding echoes off the walls (connected cells, 8-neighbours).
-    pub fn floor_obstacles(&self) -> Vec<Obstacle> {
+    /// The connected groups (8-neighbours) of the floor cells where scans
+    /// kept finding echoes off the walls, in the order of their first
+    /// cells.
+    fn floor_groups(&self) -> Vec<FloorGroup> {
         let cells: Vec<(i64, i64)> = self
             .room
             .floor
@@ -268,7 +280,6 @@ impl Perception {
         let set: std::collections::BTreeSet<(i64, i64)> = cells.iter().copied().collect();
         let mut seen = std::collections::BTreeSet::new();
         let mut out = Vec::new();
-        let [xs, ys] = self.room.ekf.now().0.fixed_rows::<2>(3).into();
         for &c in &cells {
             if !seen.insert(c) {
                 continue;
@@ -287,6 +298,25 @@ impl Perception {
                     }
                 }
             }
+            out.push((lo, hi));
+        }
+        out
+    }
+
+    /// What stands on the floor: boxes around the cells where scans kept
+    /// finding echoes off the walls (connected cells, 8-neighbours).
+    pub fn floor_obstacles(&self) -> Vec<Obstacle> {
+        let fresh;
+        let groups = match &self.room.floor_groups {
+            Some((n, g)) if *n == self.room.floor_occupied => g,
+            _ => {
+                fresh = self.floor_groups();
+                &fresh
+            }
+        };
+        let mut out = Vec::new();
+        let [xs, ys] = self.room.ekf.now().0.fixed_rows::<2>(3).into();
+        for &(lo, hi) in groups {
             let f = FLOOR_CELL_M;
             let (min, max) = (
                 [lo.0 as f64 * f, lo.1 as f64 * f],
@@ -351,7 +381,11 @@ impl Perception {
                 (p.x / FLOOR_CELL_M).floor() as i64,
                 (p.y / FLOOR_CELL_M).floor() as i64,
             );
-            *self.room.floor.entry(c).or_insert(0) += 1;
+            let n = self.room.floor.entry(c).or_insert(0);
+            *n += 1;
+            if *n == FLOOR_HITS {
+                self.room.floor_occupied += 1;
+            }
         }
     }
 
@@ -626,6 +660,14 @@ impl Perception {
             }
             let robot_twist = twist_at(&self.samples, scan.stamp, &self.odometry);
             self.note_floor(&pts, &robot_twist, scan.stamp);
+            if self
+                .room
+                .floor_groups
+                .as_ref()
+                .is_none_or(|(n, _)| *n != self.room.floor_occupied)
+            {
+                self.room.floor_groups = Some((self.room.floor_occupied, self.floor_groups()));
+            }
             self.room.floor_boxes = self.floor_obstacles();
             self.obstacles.clear();
             self.obstacles.extend(
