@@ -1210,6 +1210,37 @@ mod tests {
         assert!(worst < 0.002, "taken back {worst} rad off the turn");
     }
 
+    /// What stands on the floor comes out the same from the groups kept
+    /// between scans as from the cells grouped afresh, scan after scan,
+    /// while the robot turns round and round in the apartment's living
+    /// room.
+    #[test]
+    fn the_floor_groups_kept_give_what_grouping_afresh_gives() {
+        let (mut robot, _) = at_the_apartments_start();
+        let mut compared = 0;
+        let mut seen = 0;
+        let mut counts = std::collections::BTreeSet::new();
+        for k in 0..1500 {
+            // Turning on the spot, round and round.
+            drive(&mut robot, 0.3, std::f64::consts::FRAC_PI_2);
+            let nav = robot.perception();
+            if let Some((n, groups)) = &nav.room.floor_groups
+                && *n == nav.room.floor_occupied
+            {
+                assert_eq!(groups, &nav.floor_groups(), "period {k}");
+                compared += 1;
+                seen = seen.max(groups.len());
+                counts.insert(*n);
+            }
+        }
+        // Kept, and grouped again as cells joined.
+        assert!(
+            compared > 100 && seen > 0 && counts.len() > 2,
+            "{compared} periods, {seen} groups at most, {} counts of cells",
+            counts.len()
+        );
+    }
+
     /// The echoes kept behind a robot that turned half round on the spot,
     /// in the room frame: where they are after a fast turn (0.6 m/s of
     /// the front wheel, about 1 rad/s) and after a slow one (a tenth of
