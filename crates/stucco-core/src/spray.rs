@@ -240,24 +240,26 @@ impl ThicknessGrid {
         // so of its across and along one term of each is an exact zero:
         // across = q_u·e_v and along = q_v·e_v up the `v` axis, along =
         // q_u·e_u and across = −q_v·e_u along `u`.
-        let qu: Vec<f64> = iu.clone().map(|i| self.center(i, 0)[0] - p0[0]).collect();
-        let qv: Vec<f64> = iv.clone().map(|j| self.center(0, j)[1] - p0[1]).collect();
+        let q_u = |i: usize| self.center(i, 0)[0] - p0[0];
+        let q_v = |j: usize| self.center(0, j)[1] - p0[1];
         let (by_column, by_row): (Vec<f64>, Vec<f64>) = if vertical {
             let e = (p1[1] - p0[1]) / len;
             (
-                qu.iter().map(|&q| across_factor(q * e, sigma_m)).collect(),
-                qv.iter()
-                    .map(|&q| along_factor(q * e, len, sigma_m))
+                iu.clone()
+                    .map(|i| across_factor(q_u(i) * e, sigma_m))
+                    .collect(),
+                iv.clone()
+                    .map(|j| along_factor(q_v(j) * e, len, sigma_m))
                     .collect(),
             )
         } else {
             let e = (p1[0] - p0[0]) / len;
             (
-                qu.iter()
-                    .map(|&q| along_factor(q * e, len, sigma_m))
+                iu.clone()
+                    .map(|i| along_factor(q_u(i) * e, len, sigma_m))
                     .collect(),
-                qv.iter()
-                    .map(|&q| across_factor(-(q * e), sigma_m))
+                iv.clone()
+                    .map(|j| across_factor(-(q_v(j) * e), sigma_m))
                     .collect(),
             )
         };

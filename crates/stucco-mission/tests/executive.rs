@@ -241,19 +241,21 @@ fn move_relative_ends_at_the_goal_turning_on_the_spot() {
     assert_eq!(k.last().map(String::as_str), Some("mission_done"));
 }
 
+/// A pass along the south wall at 0.6 m, from 3 m to 4 m along it.
+fn south_pass() -> TaskSpec {
+    TaskSpec::FollowWall {
+        wall: WallName::South,
+        standoff_m: 0.6,
+        from_m: 3.0,
+        to_m: 4.0,
+        speed_mps: 0.25,
+    }
+}
+
 #[test]
 fn follow_wall_keeps_the_standoff_and_stops_at_the_end_of_the_pass() {
     let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
-    let mut exec = executive(
-        vec![TaskSpec::FollowWall {
-            wall: WallName::South,
-            standoff_m: 0.6,
-            from_m: 3.0,
-            to_m: 4.0,
-            speed_mps: 0.25,
-        }],
-        true,
-    );
+    let mut exec = executive(vec![south_pass()], true);
     let mut worst = 0.0f64;
     let mut following = 0;
     let mut farthest = 0.0f64;
@@ -2802,16 +2804,7 @@ fn a_jog_backwards_stops_for_what_is_behind() {
 #[test]
 fn a_planned_move_backwards_stops_for_what_is_behind() {
     let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
-    let mut exec = executive(
-        vec![TaskSpec::FollowWall {
-            wall: WallName::South,
-            standoff_m: 0.6,
-            from_m: 3.0,
-            to_m: 4.0,
-            speed_mps: 0.25,
-        }],
-        true,
-    );
+    let mut exec = executive(vec![south_pass()], true);
     let backing = |exec: &Executive| {
         matches!(
             exec.current_behaviour(),
