@@ -259,7 +259,10 @@ pub struct StopBenchReport {
 /// client that froze.
 pub fn bench_stop(job: &StopBenchJob) -> Result<StopBenchReport> {
     if job.stops == 0 || !(job.flood_per_s.is_finite() && job.flood_per_s > 0.0) {
-        bail!("stops and the other commands' rate must be positive");
+        return Err(stucco_runtime::BadInput(
+            "--stops and --other-per-s: positive numbers".to_owned(),
+        )
+        .into());
     }
     let robot = LoopbackRobot::start(&job.mission)?;
     let peer = robot.peer();
@@ -364,7 +367,10 @@ fn rss_mb() -> Result<f64> {
 /// process's memory (the robot's, the operator's) at every tenth.
 pub fn bench_commands(job: &CommandsBenchJob) -> Result<CommandsBenchReport> {
     if job.count < 10 || !(job.per_s.is_finite() && job.per_s > 0.0) {
-        bail!("at least 10 commands, at a positive rate");
+        return Err(stucco_runtime::BadInput(
+            "--count: at least 10; --per-s: a positive number".to_owned(),
+        )
+        .into());
     }
     let robot = LoopbackRobot::start(&job.mission)?;
     let mut op = Operator::connect(&robot.peer(), "ann")?;
@@ -402,4 +408,30 @@ pub fn bench_commands(job: &CommandsBenchJob) -> Result<CommandsBenchReport> {
         rss_at_end_mb: end,
         rss_max_mb: readings.iter().copied().fold(end, f64::max),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Settings no bench can run with are refused as bad input (exit code
+    /// 2), before any robot starts.
+    #[test]
+    fn a_bench_with_nothing_to_measure_is_refused_as_bad_input() {
+        let stop = bench_stop(&StopBenchJob {
+            mission: PathBuf::from("missions/robot.toml"),
+            stops: 0,
+            flood_per_s: 1000.0,
+            frozen_client: None,
+        });
+        let commands = bench_commands(&CommandsBenchJob {
+            mission: PathBuf::from("missions/robot.toml"),
+            count: 1_000_000,
+            per_s: f64::NAN,
+        });
+        for (e, field) in [(stop.err(), "--stops"), (commands.err(), "--per-s")] {
+            let e = e.map(|e| e.downcast::<stucco_runtime::BadInput>());
+            assert!(matches!(&e, Some(Ok(b)) if b.0.contains(field)), "{e:?}");
+        }
+    }
 }
