@@ -131,6 +131,28 @@ impl CellGrid {
     }
 }
 
+impl CellGrid {
+    /// Items listed in the cells the box `lo`–`hi` overlaps (an item may
+    /// come more than once: it is listed in every cell it covers).
+    pub fn overlapping(
+        &self,
+        lo: &Point2<f64>,
+        hi: &Point2<f64>,
+    ) -> impl Iterator<Item = usize> + '_ {
+        let (c0, r0) = cell_of(&self.origin, lo);
+        let (c1, r1) = cell_of(&self.origin, hi);
+        let (c1, r1) = (c1.min(self.cols - 1), r1.min(self.rows - 1));
+        (r0..=r1).flat_map(move |r| {
+            (c0..=c1).flat_map(move |c| {
+                let (from, to) = self.cells[r * self.cols + c];
+                self.index[from as usize..to as usize]
+                    .iter()
+                    .map(|&i| i as usize)
+            })
+        })
+    }
+}
+
 fn cell_of(origin: &Point2<f64>, p: &Point2<f64>) -> (usize, usize) {
     (
         ((p.x - origin.x) / CELL_M).max(0.0) as usize,

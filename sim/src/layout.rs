@@ -125,6 +125,22 @@ pub struct Layout {
     pub openings: Vec<TrueOpening>,
     /// True rooms.
     pub rooms: Vec<TrueRoom>,
+    /// What stands in the rooms (furniture, columns, radiators), each with
+    /// its solids.
+    pub pieces: Vec<Piece>,
+}
+
+/// Something standing in a room that is not the building: a table, a
+/// chair, a box (a sofa, a bed, a wardrobe), a radiator, a column.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Piece {
+    /// What it is, as the world file's table names it (`table`, `chair`,
+    /// `box`, `radiator`, `column`).
+    pub what: &'static str,
+    /// The middle of its footprint, m.
+    pub at: [f64; 2],
+    /// Its solids, in [`Layout::solids`].
+    pub solids: std::ops::Range<usize>,
 }
 
 impl Layout {
@@ -177,10 +193,22 @@ impl Layout {
                 if room.shared_walls.contains(&i) {
                     continue;
                 }
+                // A wall reaches past a corner where the room turns left
+                // (convex: the outer corner needs closing); at a corner
+                // where it turns right the two walls' boxes already meet,
+                // and reaching past would stand inside the room.
+                let turns_left = |p: Point2<f64>, q: Point2<f64>, r: Point2<f64>| {
+                    let (e, f) = (q - p, r - q);
+                    e.x * f.y - e.y * f.x > 0.0
+                };
+                let ends = [
+                    turns_left(corners[(i + n - 1) % n], a, b),
+                    turns_left(a, b, corners[(i + 2) % n]),
+                ];
                 wall_solids(
                     &mut out.solids,
-                    a,
-                    b,
+                    [a, b],
+                    ends,
                     room.wall_thickness_m,
                     room.height_m,
                     &cuts,
@@ -212,16 +240,32 @@ impl Layout {
             yaw_rad: 0.0,
             material: Material::Opaque,
         });
-        for t in world.tables.iter().chain(&world.chairs) {
+        let piece = |out: &mut Layout, what: &'static str, at: [f64; 2], from: usize| {
+            out.pieces.push(Piece {
+                what,
+                at,
+                solids: from..out.solids.len(),
+            });
+        };
+        for (what, t) in world
+            .tables
+            .iter()
+            .map(|t| ("table", t))
+            .chain(world.chairs.iter().map(|c| ("chair", c)))
+        {
+            let from = out.solids.len();
             legged(&mut out.solids, t);
+            piece(&mut out, what, t.at, from);
         }
         for b in &world.boxes {
+            let from = out.solids.len();
             out.solids.push(Solid::Box {
                 center: [b.at[0], b.at[1], b.height_m / 2.0],
                 half: [b.size_m[0] / 2.0, b.size_m[1] / 2.0, b.height_m / 2.0],
                 yaw_rad: b.heading_deg.to_radians(),
                 material: Material::Opaque,
             });
+            piece(&mut out, "box", b.at, from);
         }
         for r in &world.radiators {
             let Some(w) = out
@@ -234,6 +278,7 @@ impl Layout {
             let u = (w.b - w.a).normalize();
             let mid =
                 w.a + u * (r.offset_m + r.length_m / 2.0) - w.normal * (r.gap_m + r.depth_m / 2.0);
+            let from = out.solids.len();
             out.solids.push(Solid::Box {
                 center: [mid.x, mid.y, (r.span_m[0] + r.span_m[1]) / 2.0],
                 half: [
@@ -244,13 +289,16 @@ impl Layout {
                 yaw_rad: u.y.atan2(u.x),
                 material: Material::Opaque,
             });
+            piece(&mut out, "radiator", [mid.x, mid.y], from);
         }
         for c in &world.columns {
+            let from = out.solids.len();
             out.solids.push(Solid::Cylinder {
                 at: c.at,
                 radius: c.radius_m,
                 z: [0.0, c.height_m],
             });
+            piece(&mut out, "column", c.at, from);
         }
         out
     }
@@ -314,9 +362,17 @@ fn openings_of(world: &WorldSpec, room: &str, wall: usize) -> Vec<Cut> {
 }
 
 /// The boxes of one wall from `a` to `b` (inner face), `t` thick outward,
-/// `h` high, with its openings cut out. The ends reach `t` past the corners
-/// so neighbouring walls close their outer corner.
-fn wall_solids(out: &mut Vec<Solid>, a: Point2<f64>, b: Point2<f64>, t: f64, h: f64, cuts: &[Cut]) {
+/// `h` high, with its openings cut out. An end at a convex corner
+/// (`reach_past`) reaches `t` past it so neighbouring walls close their
+/// outer corner.
+fn wall_solids(
+    out: &mut Vec<Solid>,
+    [a, b]: [Point2<f64>; 2],
+    reach_past: [bool; 2],
+    t: f64,
+    h: f64,
+    cuts: &[Cut],
+) {
     let len = (b - a).norm();
     let u = (b - a) / len;
     let out_n = Vector2::new(u.y, -u.x);
@@ -334,7 +390,8 @@ fn wall_solids(out: &mut Vec<Solid>, a: Point2<f64>, b: Point2<f64>, t: f64, h: 
         });
     };
     let full = (0.0, t);
-    let mut start = -t;
+    let past = |yes: bool| if yes { t } else { 0.0 };
+    let mut start = -past(reach_past[0]);
     for c in cuts {
         piece(start, c.s0, 0.0, h, full, Material::Opaque);
         piece(c.s0, c.s1, 0.0, c.z[0], full, Material::Opaque);
@@ -360,7 +417,14 @@ fn wall_solids(out: &mut Vec<Solid>, a: Point2<f64>, b: Point2<f64>, t: f64, h: 
         }
         start = c.s1;
     }
-    piece(start, len + t, 0.0, h, full, Material::Opaque);
+    piece(
+        start,
+        len + past(reach_past[1]),
+        0.0,
+        h,
+        full,
+        Material::Opaque,
+    );
 }
 
 /// A top on four legs, the legs inset 5 cm from the top's corners.

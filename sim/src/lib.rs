@@ -37,12 +37,13 @@ mod simulator;
 mod space;
 mod tour;
 mod trace;
+mod truth;
 mod vehicle;
 mod world;
 
 pub use deposition::{Coat, Deposition, SprayerSpec, SurfaceKind, ToolState};
 pub use error::SimError;
-pub use layout::{Layout, Material, OpeningKind, Solid, TrueOpening, TrueRoom, TrueWall};
+pub use layout::{Layout, Material, OpeningKind, Piece, Solid, TrueOpening, TrueRoom, TrueWall};
 pub use plane::{PlaneCaster, ray_circle};
 pub use scene::Scene;
 pub use sensors::{FaultConfig, Interval, StuckEncoder};
@@ -52,6 +53,7 @@ pub use space::SpaceCaster;
 pub use stucco_core::{CameraSpec, TOOL_CAMERA};
 pub use tour::TourDriver;
 pub use trace::TraceHash;
+pub use truth::{Blocker, Finish, Reach, SurfaceTruth, Tally, TrueScore, score_truth};
 pub use vehicle::{DriveState, DynamicsConfig};
 pub use world::{
     BoxSpec, ColumnSpec, DoorSpec, PersonSpec, RadiatorSpec, RobotStart, RoomSpec, TableSpec,

@@ -55,3 +55,21 @@ fn a_door_is_an_opening_of_both_rooms_that_share_its_wall() {
     // The lab, south of the corridor: the corridor's south door.
     assert_eq!(doors_of("lab"), [(2, [4.0, -0.15])]);
 }
+
+#[test]
+fn walls_close_an_l_shaped_rooms_inner_corner_without_standing_in_the_room() {
+    // 6 × 5 m less a 2.5 × 2 m notch: the walls turn right at (3.5, 3).
+    let text = "name = \"l\"\nseed = 1\n[robot]\nat = [1.0, 1.0]\nheading_deg = 0.0\n\
+        [[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [6.0, 0.0], [6.0, 3.0], [3.5, 3.0], [3.5, 5.0], [0.0, 5.0]]\n";
+    let world = stucco_sim::WorldSpec::parse(text, "l").expect("a world");
+    let caster = stucco_sim::SpaceCaster::new(&stucco_sim::Layout::of(&world));
+    // Just south of the notch, east to the far wall; just west of it,
+    // north to the far wall.
+    let east = caster.cast([3.0, 2.95, 1.0], [1.0, 0.0, 0.0], 10.0, 0.0);
+    let north = caster.cast([3.45, 2.5, 1.0], [0.0, 1.0, 0.0], 10.0, 0.0);
+    assert!(east.is_some_and(|s| (s - 3.0).abs() < 1e-9), "{east:?}");
+    assert!(north.is_some_and(|s| (s - 2.5).abs() < 1e-9), "{north:?}");
+    // The notch's own walls are there.
+    let notch = caster.cast([4.5, 2.5, 1.0], [0.0, 1.0, 0.0], 10.0, 0.0);
+    assert!(notch.is_some_and(|s| (s - 0.5).abs() < 1e-9), "{notch:?}");
+}

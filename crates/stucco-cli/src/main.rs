@@ -972,11 +972,25 @@ fn print_run(r: &MissionReport) {
             d.error_m * 1e2
         );
     }
+    if let Some(t) = r.plaster.as_ref().and_then(|p| p.truth.as_ref()) {
+        println!(
+            "  on every true surface of {}: walls {:.2}%, ceiling {:.2}% of what the tool can reach \
+             within the coat's tolerance; {:.2} m² left unreached, {:.2} m² blocked",
+            t.rooms.join(", "),
+            t.walls.coverage_pct(),
+            t.ceilings.coverage_pct(),
+            t.walls.unreached_m2 + t.ceilings.unreached_m2,
+            t.walls.blocked_m2 + t.ceilings.blocked_m2,
+        );
+        for b in t.blockers.iter().filter(|b| b.area_m2 >= 0.1) {
+            println!("    {}", b.advice);
+        }
+    }
     if let Some(p) = &r.plaster {
         let pct = |x: Option<f64>| x.unwrap_or(0.0);
         println!(
-            "  plastered from {} stations: walls {:.2}%, ceiling {:.2}% within the coat's tolerance; \
-             CV {:.2}%, over-thick {:.2}%, {:.1} L sprayed, {:.2}% into openings",
+            "  as planned, from {} stations: walls {:.2}%, ceiling {:.2}% of the plan's reach within \
+             the coat's tolerance; CV {:.2}%, over-thick {:.2}%, {:.1} L sprayed, {:.2}% into openings",
             p.stations,
             pct(r.wall_coverage_pct),
             pct(r.ceiling_coverage_pct),

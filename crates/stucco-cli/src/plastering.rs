@@ -126,6 +126,131 @@ pub(crate) fn room_coats(
         .collect()
 }
 
+/// Top of the robot while it drives, its lift's mast telescoped, m: what
+/// stands lower (a table's top) is in its body's way; a door's head
+/// (2.0 m and up) is not.
+pub const MAST_PARKED_M: f64 = 1.9;
+
+/// Least margin the body keeps while it drives, as the truth's reach
+/// takes it, m: the protective field in the tightest setting the shipped
+/// missions use (the apartment's), about three times the laser's range
+/// noise.
+pub const DRIVE_MARGIN_M: f64 = 0.03;
+
+/// The robot's reach and the job's finish as the truth scores them: the
+/// body of `vehicle`, the travel and margins of `tool`.
+pub fn true_terms(
+    tool: &SprayTool,
+    vehicle: &stucco_core::VehicleSpec,
+) -> (stucco_sim::Reach, stucco_sim::Finish) {
+    (
+        stucco_sim::Reach {
+            body_x_m: [-vehicle.rear_overhang_m, vehicle.front_m()],
+            body_half_width_m: vehicle.width_m / 2.0,
+            body_top_m: MAST_PARKED_M,
+            clearance_m: tool.clearance_m,
+            drive_margin_m: DRIVE_MARGIN_M,
+            rail_m: tool.rail_m,
+            arm_m: tool.arm_m,
+            lift_m: tool.lift_m,
+            wall_standoff_m: tool.wall_standoff_m,
+            ceiling_standoff_m: tool.ceiling_standoff_m,
+        },
+        stucco_sim::Finish {
+            coat_m: tool.thickness_m(),
+            tolerance: tool.tolerance,
+            skirting_m: tool.skirting_m,
+            edge_margin_m: tool.edge_margin_m,
+            opening_margin_m: tool.opening_margin_m,
+        },
+    )
+}
+
+/// The plaster on every true plasterable surface of the rooms the job
+/// names, whatever the robot planned ([`stucco_sim::score_truth`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct TruthReport {
+    /// The rooms scored: each the job names.
+    pub rooms: Vec<String>,
+    /// Walls: plasterable, covered, blocked, unreached, m².
+    pub walls: stucco_sim::Tally,
+    /// Ceilings, the same.
+    pub ceilings: stucco_sim::Tally,
+    /// Each surface.
+    pub surfaces: Vec<stucco_sim::SurfaceTruth>,
+    /// What keeps surface from the tool, largest first, each with what
+    /// to do about it.
+    pub blockers: Vec<BlockerReport>,
+}
+
+/// Surface out of the tool's reach and what stands in the way.
+#[derive(Clone, Debug, Serialize)]
+pub struct BlockerReport {
+    /// The room.
+    pub room: String,
+    /// `wall N` or `ceiling`.
+    pub surface: String,
+    /// What blocks it (`table`, `box`, …), none for the room's own shape.
+    pub what: Option<&'static str>,
+    /// Where it stands, m (world frame).
+    pub at_m: Option<[f64; 2]>,
+    /// The surface it keeps from the tool, m².
+    pub area_m2: f64,
+    /// What to do: "move the box at (2.50, 3.70) to reach 1.9 m² of wall 2".
+    pub advice: String,
+}
+
+impl TruthReport {
+    /// The true surfaces of `rooms` of `sim`'s world scored, the robot
+    /// having started at `start`.
+    pub fn of(
+        sim: &Simulator,
+        rooms: Vec<String>,
+        start: &Pose2,
+        tool: &SprayTool,
+        vehicle: &stucco_core::VehicleSpec,
+    ) -> TruthReport {
+        let (reach, finish) = true_terms(tool, vehicle);
+        let t = stucco_sim::score_truth(sim.layout(), sim.coats(), &rooms, start, &reach, &finish);
+        let blockers = t
+            .blockers
+            .iter()
+            .map(|b| {
+                let surface = match b.surface {
+                    SurfaceKind::Wall { index } => format!("wall {index}"),
+                    SurfaceKind::Ceiling => "ceiling".to_owned(),
+                };
+                let advice = match (b.what, b.at) {
+                    (Some(what), Some([x, y])) => format!(
+                        "move the {what} at ({x:.2}, {y:.2}) to reach {:.1} m² of the {} {surface}",
+                        b.area_m2, b.room
+                    ),
+                    _ => format!(
+                        "{:.1} m² of the {} {surface} is out of this robot's reach (the room's \
+                         shape or height)",
+                        b.area_m2, b.room
+                    ),
+                };
+                BlockerReport {
+                    room: b.room.clone(),
+                    surface,
+                    what: b.what,
+                    at_m: b.at,
+                    area_m2: b.area_m2,
+                    advice,
+                }
+            })
+            .collect();
+        TruthReport {
+            rooms,
+            walls: t.walls,
+            ceilings: t.ceilings,
+            surfaces: t.surfaces,
+            blockers,
+        }
+    }
+}
+
 /// What a plastering run reports beyond the top-level scores (which sum
 /// every room plastered).
 #[derive(Clone, Debug, Serialize)]
@@ -141,6 +266,8 @@ pub struct PlasterReport {
     pub rooms: Vec<RoomPlaster>,
     /// The floor plan's rooms no `plaster` task plastered.
     pub rooms_left: Vec<RoomLeft>,
+    /// Every true plasterable surface of the rooms the job names.
+    pub truth: Option<TruthReport>,
 }
 
 /// A room of the floor plan the run did not plaster.

@@ -235,8 +235,24 @@ pub struct MissionReport {
     pub safety_stops: usize,
     /// Events written.
     pub events: usize,
+    /// Every true plasterable wall area of the rooms the job names
+    /// (openings and the bands left to the hand excepted) within the
+    /// coat's tolerance, as a share of what is not blocked, % (plastering
+    /// missions). What the robot did not plan counts as unreached.
+    pub true_wall_coverage_pct: Option<f64>,
+    /// The same for the ceilings, %.
+    pub true_ceiling_coverage_pct: Option<f64>,
+    /// Plasterable area left bare that the tool cannot physically reach
+    /// for the true furniture and the rooms' shape, m² (from the truth,
+    /// not the robot's belief; `plaster.truth.blockers` says what blocks
+    /// it).
+    pub blocked_m2: Option<f64>,
+    /// The rest not within tolerance: bare, thin or thick where the tool
+    /// could have sprayed, m².
+    pub unreached_m2: Option<f64>,
     /// Plasterable wall area the plan reaches within the coat's tolerance,
-    /// on the true walls, % (plastering missions).
+    /// on the true walls, % (plastering missions): the plan's own reach,
+    /// the truth's figures are `true_wall_coverage_pct`.
     pub wall_coverage_pct: Option<f64>,
     /// The same for the ceiling, %.
     pub ceiling_coverage_pct: Option<f64>,
@@ -829,7 +845,10 @@ impl<'a, P: Simulated> SimJob<'a, P> {
                 },
         } = self;
         let Setup {
-            mission, resume, ..
+            mission,
+            resume,
+            world: start_world,
+            ..
         } = *setup;
         let (events_written, safety_stops) = (events.events(), events.safety_stops());
         events.finish()?;
@@ -942,6 +961,33 @@ impl<'a, P: Simulated> SimJob<'a, P> {
                 Ok(crate::plastering::score_run(sim, &layout, &rooms))
             })?)
         };
+        // Every true surface of the rooms the job names, whatever was
+        // planned: what was not is bare or blocked, never left out.
+        let start = Pose2::new(
+            start_world.robot.at[0],
+            start_world.robot.at[1],
+            start_world.robot.heading_deg.to_radians(),
+        );
+        let named = job_rooms(
+            mission,
+            &layout,
+            &start,
+            plans.values().map(|(f, _, _)| f.name.clone()),
+        );
+        let truth = match &mission.spray {
+            Some(tool) if !named.is_empty() => {
+                Some(robot.platform().with_plaster(world.as_ref(), |sim| {
+                    Ok(crate::plastering::TruthReport::of(
+                        sim,
+                        named,
+                        &start,
+                        tool,
+                        &robot_spec().vehicle,
+                    ))
+                })?)
+            }
+            _ => None,
+        };
         let plastered = scored.map(|(score, each)| {
             let top = robot_spec().vehicle.max_speed_mps;
             // The plastering time over every part of the run (a task stopped
@@ -1038,6 +1084,14 @@ impl<'a, P: Simulated> SimJob<'a, P> {
             path_length_m: trace.length,
             safety_stops,
             events: events_written,
+            true_wall_coverage_pct: truth.as_ref().map(|t| t.walls.coverage_pct()),
+            true_ceiling_coverage_pct: truth.as_ref().map(|t| t.ceilings.coverage_pct()),
+            blocked_m2: truth
+                .as_ref()
+                .map(|t| t.walls.blocked_m2 + t.ceilings.blocked_m2),
+            unreached_m2: truth
+                .as_ref()
+                .map(|t| t.walls.unreached_m2 + t.ceilings.unreached_m2),
             wall_coverage_pct: plastered.as_ref().map(|p| p.0.wall_coverage_pct),
             ceiling_coverage_pct: plastered.as_ref().map(|p| p.0.ceiling_coverage_pct),
             overspray_pct: plastered.as_ref().map(|p| p.0.overspray_pct),
@@ -1053,6 +1107,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
                     sprayed_l: score.sprayed_l,
                     rooms,
                     rooms_left,
+                    truth: truth.clone(),
                 }
             }),
         };
@@ -1295,6 +1350,43 @@ pub(crate) fn mission_room(mission: &Mission, resume: Option<&RoomMap>) -> Resul
 
 /// The room of `layout` that `at` (world frame) stands in (none in a
 /// doorway's thickness).
+/// The rooms a job names for plastering, by their world names: each
+/// `plaster` task's room where the tasks before it tell it (the start
+/// room, then each `go_to_room`'s), and every room a plaster task planned
+/// in. A mission without a drawing plasters the room it starts in.
+fn job_rooms(
+    mission: &Mission,
+    layout: &Layout,
+    start: &Pose2,
+    planned: impl Iterator<Item = String>,
+) -> Vec<String> {
+    let plaster = |t: &TaskSpec| matches!(t, TaskSpec::Plaster { .. });
+    let mut rooms: Vec<String> = Vec::new();
+    match mission.floor_plan() {
+        Some(plan) => {
+            let mut here = mission
+                .start
+                .as_ref()
+                .and_then(|s| s.room.clone())
+                .filter(|name| plan.room(name).is_some());
+            for task in &mission.tasks {
+                match task {
+                    TaskSpec::GoToRoom { room, .. } => here = Some(room.clone()),
+                    TaskSpec::PassDoor { .. } => here = None,
+                    t if plaster(t) => rooms.extend(here.clone()),
+                    _ => {}
+                }
+            }
+        }
+        None if mission.tasks.iter().any(plaster) => rooms.extend(true_room(layout, start)),
+        None => {}
+    }
+    rooms.extend(planned);
+    let mut seen = std::collections::BTreeSet::new();
+    rooms.retain(|r| seen.insert(r.clone()));
+    rooms
+}
+
 fn true_room(layout: &Layout, at: &Pose2) -> Option<String> {
     RoomFrame::of(layout, at).ok().map(|f| f.name)
 }
