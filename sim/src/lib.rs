@@ -40,6 +40,7 @@ mod trace;
 mod truth;
 mod vehicle;
 mod world;
+mod worldgen;
 
 pub use deposition::{Coat, Deposition, SprayerSpec, SurfaceKind, ToolState};
 pub use error::SimError;
@@ -59,3 +60,4 @@ pub use world::{
     BoxSpec, ColumnSpec, DoorSpec, PersonSpec, RadiatorSpec, RobotStart, RoomSpec, TableSpec,
     TourSpec, WindowSpec, WorldSpec,
 };
+pub use worldgen::{Building, CORRIDOR, Drawing, DrawnDoor, DrawnWindow, generate};

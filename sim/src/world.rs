@@ -23,35 +23,35 @@ pub struct WorldSpec {
     #[serde(default, rename = "room")]
     pub rooms: Vec<RoomSpec>,
     /// Doors, each in a wall of a room.
-    #[serde(default, rename = "door")]
+    #[serde(default, rename = "door", skip_serializing_if = "Vec::is_empty")]
     pub doors: Vec<DoorSpec>,
     /// Windows, each in a wall of a room.
-    #[serde(default, rename = "window")]
+    #[serde(default, rename = "window", skip_serializing_if = "Vec::is_empty")]
     pub windows: Vec<WindowSpec>,
     /// Tables: a top on four legs.
-    #[serde(default, rename = "table")]
+    #[serde(default, rename = "table", skip_serializing_if = "Vec::is_empty")]
     pub tables: Vec<TableSpec>,
     /// Chairs: a seat on four legs.
-    #[serde(default, rename = "chair")]
+    #[serde(default, rename = "chair", skip_serializing_if = "Vec::is_empty")]
     pub chairs: Vec<TableSpec>,
     /// Boxes standing on the floor.
-    #[serde(default, rename = "box")]
+    #[serde(default, rename = "box", skip_serializing_if = "Vec::is_empty")]
     pub boxes: Vec<BoxSpec>,
     /// Radiators on walls.
-    #[serde(default, rename = "radiator")]
+    #[serde(default, rename = "radiator", skip_serializing_if = "Vec::is_empty")]
     pub radiators: Vec<RadiatorSpec>,
     /// Round columns.
-    #[serde(default, rename = "column")]
+    #[serde(default, rename = "column", skip_serializing_if = "Vec::is_empty")]
     pub columns: Vec<ColumnSpec>,
     /// People walking along paths.
-    #[serde(default, rename = "person")]
+    #[serde(default, rename = "person", skip_serializing_if = "Vec::is_empty")]
     pub people: Vec<PersonSpec>,
     /// A collision-free loop of waypoints for benches and demos, m.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tour: Vec<[f64; 2]>,
     /// Further drives by name (`[tours.NAME]`), for a world whose rooms
     /// a loop driven forwards cannot reach.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub tours: BTreeMap<String, TourSpec>,
 }
 

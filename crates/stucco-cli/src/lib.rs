@@ -53,8 +53,8 @@ pub use log_replay::{
 pub use logging::init_logging;
 pub use op::{BenchReport, CommandResult, Feed, Operator};
 pub use plastering::{
-    PlasterReport, PredictedScores, RoomPlaster, WORLD_FILE, WorldState, sprayer_of,
-    time_lower_bound,
+    BlockerReport, PlasterReport, PredictedScores, RoomPlaster, TruthReport, WORLD_FILE,
+    WorldState, sprayer_of, time_lower_bound, true_terms,
 };
 pub use record::{RecordedMission, Recorder, ReplayReport, replay_run};
 pub use robot::{PlatformKind, RobotJob, RobotRun, run_robot};

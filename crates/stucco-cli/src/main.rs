@@ -271,6 +271,17 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Generate a building nobody has seen: `DIR/world.toml` (the truth),
+    /// `DIR/plan.toml` (its drawing, exact or off by up to 3 cm) and
+    /// `DIR/mission.toml` (plaster every room, nothing else).
+    Worldgen {
+        /// The building's seed: the same seed, the same building.
+        #[arg(long)]
+        seed: u64,
+        /// Folder to write into (made if missing).
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 /// What `stucco sim` does.
@@ -1077,6 +1088,56 @@ fn run_experiment(job: RunJob, json: bool) -> ExitCode {
     }
 }
 
+/// Writes the building of `seed` into `out`, and says what it is.
+fn worldgen(seed: u64, out: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let b = stucco_sim::generate(seed);
+    std::fs::create_dir_all(out).with_context(|| format!("cannot make {}", out.display()))?;
+    for (name, text) in [
+        ("world.toml", b.world_toml()),
+        ("plan.toml", b.plan_toml()),
+        ("mission.toml", b.mission_toml()),
+    ] {
+        let path = out.join(name);
+        stucco_runtime::write_atomic(&path, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    let w = &b.world;
+    // How much of it this robot could plaster at all: every surface bare,
+    // scored on the truth.
+    let tool = stucco_plan::SprayTool::default();
+    let layout = stucco_sim::Layout::of(w);
+    let coats = stucco_sim::Deposition::new(stucco_cli::sprayer_of(&tool), &layout);
+    let (reach, finish) = stucco_cli::true_terms(&tool, &stucco_core::VehicleSpec::default());
+    let rooms: Vec<String> = w.rooms.iter().map(|r| r.name.clone()).collect();
+    let start = stucco_core::Pose2::new(
+        w.robot.at[0],
+        w.robot.at[1],
+        w.robot.heading_deg.to_radians(),
+    );
+    let t = stucco_sim::score_truth(&layout, coats.coats(), &rooms, &start, &reach, &finish);
+    let shapes: Vec<String> = b.shapes.iter().map(|(n, k)| format!("{n} {k}")).collect();
+    println!(
+        "building {seed}: a {:.2} m corridor and {} room(s) ({}); {} door(s), {} shut; {} window(s); \
+         {} piece(s) of furniture; {} people; plasterable: walls {:.1} m² ({:.1} m² out of this \
+         robot's reach), ceilings {:.1} m² ({:.1} m² out of reach); written to {}",
+        w.rooms[0].corners[2][1],
+        b.shapes.len(),
+        shapes.join(", "),
+        w.doors.len(),
+        w.doors.iter().filter(|d| !d.open).count(),
+        w.windows.len(),
+        w.tables.len() + w.chairs.len() + w.boxes.len() + w.columns.len(),
+        w.people.len(),
+        t.walls.plasterable_m2,
+        t.walls.blocked_m2,
+        t.ceilings.plasterable_m2,
+        t.ceilings.blocked_m2,
+        out.display()
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
@@ -1382,6 +1443,13 @@ fn main() -> ExitCode {
             json,
         ),
         Command::Bench { action } => bench(action),
+        Command::Worldgen { seed, out } => match worldgen(seed, &out) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Simbench {
             world,
             seed,

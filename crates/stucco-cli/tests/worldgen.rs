@@ -1,0 +1,40 @@
+//! `stucco worldgen`: a building's three files written, the world one the
+//! simulator takes, the same seed the same files.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::process::Command;
+
+fn worldgen(seed: u64, out: &std::path::Path) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_stucco"))
+        .args(["worldgen", "--seed", &seed.to_string(), "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8(o.stdout).unwrap()
+}
+
+#[test]
+fn worldgen_writes_a_world_its_drawing_and_a_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let said = worldgen(3, dir.path());
+    assert!(said.starts_with("building 3: "), "{said}");
+    assert!(said.contains("plasterable: walls"), "{said}");
+    let read = |name: &str| std::fs::read_to_string(dir.path().join(name)).unwrap();
+    let world = stucco_sim::WorldSpec::load(&dir.path().join("world.toml")).unwrap();
+    assert_eq!(world, stucco_sim::generate(3).world);
+    let plan = read("plan.toml");
+    assert!(plan.contains("[[room]]") && plan.contains("corners = ") && plan.contains("[[door]]"));
+    let mission = read("mission.toml");
+    assert!(mission.contains("rooms = \"all\""), "{mission}");
+    // Again, into another folder: the same bytes.
+    let again = tempfile::tempdir().unwrap();
+    worldgen(3, again.path());
+    for name in ["world.toml", "plan.toml", "mission.toml"] {
+        assert_eq!(
+            read(name),
+            std::fs::read_to_string(again.path().join(name)).unwrap(),
+            "{name}"
+        );
+    }
+}
