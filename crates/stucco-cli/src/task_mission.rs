@@ -1382,6 +1382,8 @@ fn job_rooms(
         None => {}
     }
     rooms.extend(planned);
+    // What `rooms = …` named, a way there or not.
+    rooms.extend(mission.plaster_rooms().iter().cloned());
     let mut seen = std::collections::BTreeSet::new();
     rooms.retain(|r| seen.insert(r.clone()));
     rooms

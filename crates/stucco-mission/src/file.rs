@@ -73,9 +73,15 @@ pub struct Mission {
     /// The plan's doors between those rooms (`[[door]]`).
     #[serde(default, rename = "door")]
     pub doors: Vec<PlanDoor>,
+    /// The windows the plan gives (`[[window]]`), if it gives them.
+    #[serde(default, rename = "window")]
+    pub windows: Vec<crate::PlanWindow>,
     /// The plan of `rooms` and `doors`, checked once at load.
     #[serde(skip)]
     floor: Option<FloorPlan>,
+    /// The rooms `plaster` tasks name by their `rooms`.
+    #[serde(skip)]
+    named_rooms: Vec<String>,
     /// The mission file's text as it was parsed.
     #[serde(skip)]
     text: String,
@@ -107,6 +113,8 @@ struct PlanFile {
     rooms: Vec<PlanRoom>,
     #[serde(default, rename = "door")]
     doors: Vec<PlanDoor>,
+    #[serde(default, rename = "window")]
+    windows: Vec<crate::PlanWindow>,
 }
 
 /// What the robot knows of its start in a task mission: it stands at the
@@ -122,7 +130,9 @@ pub struct StartKnowledge {
     /// size is the plan's).
     #[serde(default)]
     pub room: Option<String>,
-    /// How far off the sizes (and the plan's doors) may be, m (σ).
+    /// How far off the sizes (and the plan's doors) may be, m (σ); by
+    /// default 3 cm, a drawing's slack.
+    #[serde(default = "drawing_sigma")]
     pub room_sigma_m: f64,
     /// How far off the start position may be, m (σ).
     #[serde(default = "start_sigma")]
@@ -131,6 +141,10 @@ pub struct StartKnowledge {
 
 fn start_sigma() -> f64 {
     0.02
+}
+
+fn drawing_sigma() -> f64 {
+    0.03
 }
 
 impl StartKnowledge {
@@ -238,11 +252,18 @@ impl Mission {
         // The plan's own file, when it has one: its faults are named there.
         let plan_file = match &mission.plan {
             None => None,
-            Some(_) if !(mission.rooms.is_empty() && mission.doors.is_empty()) => bad!(
-                "{}:{}: plan: the plan is in its file or in [[room]] and [[door]] here, not both",
-                path.display(),
-                line_of(&text, "", "plan")
-            ),
+            Some(_)
+                if !(mission.rooms.is_empty()
+                    && mission.doors.is_empty()
+                    && mission.windows.is_empty()) =>
+            {
+                bad!(
+                    "{}:{}: plan: the plan is in its file or in [[room]], [[door]] and [[window]] \
+                     here, not both",
+                    path.display(),
+                    line_of(&text, "", "plan")
+                )
+            }
             Some(file) => {
                 let plan_path = path.parent().map_or_else(|| file.clone(), |d| d.join(file));
                 // A plan given is named as the copy it is in errors.
@@ -266,6 +287,7 @@ impl Mission {
                 let drawn: PlanFile = parse_toml(&plan_text, &plan_path)?;
                 mission.rooms = drawn.rooms;
                 mission.doors = drawn.doors;
+                mission.windows = drawn.windows;
                 Some((plan_text, plan_path))
             }
         };
@@ -404,9 +426,130 @@ impl Mission {
                 );
             }
         }
+        mission.expand_rooms(&text, path)?;
         mission.plan_text = plan_file.map(|(plan_text, _)| plan_text);
         mission.text = text;
         Ok(mission)
+    }
+
+    /// Each `plaster` task naming the drawing's rooms becomes, room by
+    /// room, going there (`go_to_room`), mapping it (`map_room`, its
+    /// default loop) and plastering it; the rooms in the order that goes
+    /// each time to the nearest left (fewest doors). A room no open door
+    /// leads to is left out of the tasks and stays named: the report
+    /// scores it, and lists it among the rooms left.
+    fn expand_rooms(&mut self, text: &str, path: &Path) -> Result<()> {
+        let plan = self.floor.clone();
+        let mut here = plan
+            .as_ref()
+            .zip(self.start.as_ref().and_then(|s| s.room.as_ref()))
+            .and_then(|(p, name)| p.room(name));
+        let mut tasks = Vec::with_capacity(self.tasks.len());
+        for (i, task) in std::mem::take(&mut self.tasks).into_iter().enumerate() {
+            match task {
+                TaskSpec::Plaster {
+                    rooms: Some(rooms),
+                    walls,
+                    ceiling,
+                    speed_mps,
+                    settle_s,
+                    survey,
+                    survey_speed_mps,
+                    region,
+                    spray,
+                } => {
+                    let line = line_of_array(text, "task", i, "rooms");
+                    let Some(plan) = &plan else {
+                        bad!(
+                            "{}:{line}: task {} (plaster): rooms: names rooms of the building's \
+                             drawing, and the mission has none ([[room]], or plan = FILE)",
+                            path.display(),
+                            i + 1
+                        );
+                    };
+                    let named: Vec<usize> = match &rooms {
+                        crate::Rooms::All(_) => (0..plan.rooms().len()).collect(),
+                        crate::Rooms::Named(names) => {
+                            let mut out = Vec::new();
+                            for name in names {
+                                let Some(k) = plan.room(name) else {
+                                    bad!(
+                                        "{}:{line}: task {} (plaster): rooms: no room {name:?} on \
+                                         the floor plan",
+                                        path.display(),
+                                        i + 1
+                                    );
+                                };
+                                if !out.contains(&k) {
+                                    out.push(k);
+                                }
+                            }
+                            out
+                        }
+                    };
+                    for &k in &named {
+                        let name = &plan.rooms()[k].name;
+                        if !self.named_rooms.contains(name) {
+                            self.named_rooms.push(name.clone());
+                        }
+                    }
+                    let mut left = named;
+                    loop {
+                        // The nearest room left, by doors passed; the room
+                        // the robot is in first.
+                        let next = left
+                            .iter()
+                            .enumerate()
+                            .filter_map(|(j, &k)| {
+                                let doors = match here {
+                                    Some(h) => plan.route(h, k)?.len(),
+                                    None => usize::MAX - 1,
+                                };
+                                Some((doors, j))
+                            })
+                            .min();
+                        let Some((_, j)) = next else {
+                            break;
+                        };
+                        let room = left.remove(j);
+                        if here != Some(room) {
+                            tasks.push(TaskSpec::go_to_room(&plan.rooms()[room].name));
+                        }
+                        tasks.push(TaskSpec::map_room());
+                        tasks.push(TaskSpec::Plaster {
+                            walls: walls.clone(),
+                            ceiling,
+                            speed_mps,
+                            settle_s,
+                            survey,
+                            survey_speed_mps,
+                            region,
+                            spray: spray.clone(),
+                            rooms: None,
+                        });
+                        here = Some(room);
+                    }
+                }
+                task => {
+                    match &task {
+                        TaskSpec::GoToRoom { room, .. } => {
+                            here = plan.as_ref().and_then(|p| p.room(room));
+                        }
+                        TaskSpec::PassDoor { .. } => here = None,
+                        _ => {}
+                    }
+                    tasks.push(task);
+                }
+            }
+        }
+        self.tasks = tasks;
+        Ok(())
+    }
+
+    /// The rooms the mission's `plaster` tasks name by their `rooms` (the
+    /// drawing's names), whether a way leads there or not.
+    pub fn plaster_rooms(&self) -> &[String] {
+        &self.named_rooms
     }
 
     /// The mission file's text, as the mission was parsed from it.
@@ -423,10 +566,12 @@ impl Mission {
     /// The floor plan, checked (a door must lie in a wall of each of its
     /// rooms): `None` when the mission has none.
     fn checked_plan(&self, text: &str, path: &Path) -> Result<Option<FloorPlan>> {
-        if self.rooms.is_empty() && self.doors.is_empty() {
+        if self.rooms.is_empty() && self.doors.is_empty() && self.windows.is_empty() {
             return Ok(None);
         }
-        match FloorPlan::new(self.rooms.clone(), self.doors.clone()) {
+        match FloorPlan::new(self.rooms.clone(), self.doors.clone())
+            .and_then(|p| p.with_windows(self.windows.clone()))
+        {
             Ok(plan) => Ok(Some(plan)),
             Err(e) => {
                 let which = match self.rooms.get(e.index).filter(|_| e.table == "room") {
@@ -743,5 +888,190 @@ spray = { thickness_mm = 5.0, flow_l_per_min = 6.0 }
         let text = format!("{TWO_COATS}\n[failsafe]\non_task_failure = \"continue\"\n");
         let m = Mission::parse(&text, Path::new("policy.toml")).expect("a mission");
         assert_eq!(m.failsafe.on_task_failure, crate::FailurePolicy::Continue);
+    }
+
+    /// A hall and an office drawn by their corners (the office's each off
+    /// by up to 2 cm, as a drawing is), a door between them, a window.
+    const DRAWN: &str = r#"
+name = "drawn"
+
+[start]
+room = "hall"
+room_sigma_m = 0.03
+
+[[room]]
+name = "hall"
+corners = [[0.0, 0.0], [6.0, 0.0], [6.0, 1.5], [0.0, 1.5]]
+
+[[room]]
+name = "office"
+corners = [[0.01, 1.65], [4.0, 1.66], [3.98, 5.0], [0.0, 4.99]]
+
+[[door]]
+rooms = ["hall", "office"]
+at_m = [2.0, 1.575]
+width_m = 0.9
+
+[[window]]
+room = "office"
+at_m = [2.0, 5.0]
+width_m = 1.2
+sill_m = 0.9
+head_m = 2.1
+
+[[task]]
+task = "go_to_room"
+room = "office"
+"#;
+
+    #[test]
+    fn rooms_drawn_by_their_corners_are_the_rectangles_they_span() {
+        let m = Mission::parse(DRAWN, Path::new("drawn.toml")).expect("a mission");
+        let plan = m.floor_plan().expect("a plan");
+        let office = &plan.rooms()[1];
+        assert_eq!(office.origin_m, [0.0, 1.65]);
+        assert!((office.size_m[0] - 4.0).abs() < 1e-12 && (office.size_m[1] - 3.35).abs() < 1e-12);
+        assert_eq!(plan.doors_of(1).count(), 1);
+        assert_eq!(plan.windows().len(), 1);
+        // Written back and read again, it is the same plan.
+        let json = serde_json::to_string(&plan).expect("json");
+        let again: FloorPlan = serde_json::from_str(&json).expect("a plan");
+        assert_eq!(again, plan);
+    }
+
+    #[test]
+    fn a_drawing_s_faults_are_named_with_their_line() {
+        let fault = |text: &str| {
+            Mission::parse(text, Path::new("drawn.toml"))
+                .expect_err("a fault")
+                .to_string()
+        };
+        let line = |key: &str, nth: usize| {
+            DRAWN
+                .lines()
+                .enumerate()
+                .filter(|(_, l)| l.starts_with(key))
+                .nth(nth)
+                .map(|(i, _)| i + 1)
+                .expect("the line")
+        };
+        // An L-shaped office: refused at load, not taken for its box.
+        let l_room = DRAWN.replace(
+            "[[0.01, 1.65], [4.0, 1.66], [3.98, 5.0], [0.0, 4.99]]",
+            "[[0.0, 1.65], [4.0, 1.65], [4.0, 3.5], [2.0, 3.5], [2.0, 5.0], [0.0, 5.0]]",
+        );
+        let e = fault(&l_room);
+        assert!(
+            e.starts_with(&format!("drawn.toml:{}:", line("corners", 1))),
+            "{e}"
+        );
+        assert!(e.contains("corners") && e.contains("6 corners"), "{e}");
+        // Clockwise.
+        let cw = DRAWN.replace(
+            "[[0.0, 0.0], [6.0, 0.0], [6.0, 1.5], [0.0, 1.5]]",
+            "[[0.0, 0.0], [0.0, 1.5], [6.0, 1.5], [6.0, 0.0]]",
+        );
+        let e = fault(&cw);
+        assert!(
+            e.starts_with(&format!("drawn.toml:{}:", line("corners", 0))),
+            "{e}"
+        );
+        assert!(e.contains("counter-clockwise"), "{e}");
+        // Corners and a size that disagree.
+        let both = DRAWN.replace(
+            "name = \"hall\"\ncorners",
+            "name = \"hall\"\nsize_m = [5.0, 1.5]\ncorners",
+        );
+        assert!(fault(&both).contains("not both"), "{}", fault(&both));
+        // A window off every wall of its room, one whose head is below its
+        // sill.
+        let off = DRAWN.replace("at_m = [2.0, 5.0]", "at_m = [2.0, 3.0]");
+        let e = fault(&off);
+        assert!(
+            e.starts_with(&format!("drawn.toml:{}:", line("at_m", 1))),
+            "{e}"
+        );
+        assert!(e.contains("[[window]] 1: at_m"), "{e}");
+        let low = DRAWN.replace("head_m = 2.1", "head_m = 0.5");
+        assert!(fault(&low).contains("head_m"), "{}", fault(&low));
+        // A door the drawing puts in no wall of one of its rooms.
+        let door = DRAWN.replace("at_m = [2.0, 1.575]", "at_m = [2.0, 0.75]");
+        let e = fault(&door);
+        assert!(
+            e.starts_with(&format!("drawn.toml:{}:", line("at_m", 0))),
+            "{e}"
+        );
+    }
+
+    /// The drawing with a store room off the hall behind a shut door, and
+    /// one plaster task for its rooms.
+    fn plaster_rooms(rooms: &str) -> String {
+        let tasks = DRAWN.replace(
+            "[[task]]\ntask = \"go_to_room\"\nroom = \"office\"\n",
+            &format!("[spray]\n\n[[task]]\ntask = \"plaster\"\nrooms = {rooms}\n"),
+        );
+        format!(
+            "{tasks}\n[[room]]\nname = \"store\"\norigin_m = [6.15, 0.0]\nsize_m = [2.0, 1.5]\n\n\
+             [[door]]\nrooms = [\"hall\", \"store\"]\nat_m = [6.075, 0.75]\nwidth_m = 0.8\nshut = true\n"
+        )
+    }
+
+    #[test]
+    fn a_plaster_task_naming_rooms_goes_to_each_maps_it_and_plasters_it() {
+        let names = |m: &Mission| -> Vec<String> {
+            m.tasks
+                .iter()
+                .map(|t| match t {
+                    TaskSpec::GoToRoom { room, .. } => format!("go_to_room {room}"),
+                    TaskSpec::Plaster { rooms, .. } => {
+                        assert!(rooms.is_none());
+                        "plaster".to_owned()
+                    }
+                    other => other.name().to_owned(),
+                })
+                .collect()
+        };
+        let m =
+            Mission::parse(&plaster_rooms("\"all\""), Path::new("drawn.toml")).expect("a mission");
+        // The hall it starts in first, then the office; the store, shut,
+        // named but not gone to.
+        assert_eq!(
+            names(&m),
+            [
+                "map_room",
+                "plaster",
+                "go_to_room office",
+                "map_room",
+                "plaster"
+            ]
+        );
+        assert_eq!(m.plaster_rooms(), ["hall", "office", "store"]);
+        let m = Mission::parse(&plaster_rooms("[\"office\"]"), Path::new("drawn.toml"))
+            .expect("a mission");
+        assert_eq!(names(&m), ["go_to_room office", "map_room", "plaster"]);
+        assert_eq!(m.plaster_rooms(), ["office"]);
+        // A room the drawing does not have, named with its line.
+        let text = plaster_rooms("[\"attic\"]");
+        let line = text
+            .lines()
+            .position(|l| l.starts_with("rooms = [\"attic"))
+            .expect("the line")
+            + 1;
+        let e = Mission::parse(&text, Path::new("drawn.toml"))
+            .expect_err("no attic")
+            .to_string();
+        assert!(e.starts_with(&format!("drawn.toml:{line}:")), "{e}");
+        assert!(e.contains("attic"), "{e}");
+        // Rooms without a drawing.
+        let e = Mission::parse(
+            "name = \"x\"\n[start]\nroom_m = [4.0, 3.0]\n[spray]\n[[task]]\ntask = \"plaster\"\nrooms = \"all\"\n",
+            Path::new("bare.toml"),
+        )
+        .expect_err("no drawing")
+        .to_string();
+        assert!(
+            e.starts_with("bare.toml:7:") && e.contains("drawing"),
+            "{e}"
+        );
     }
 }

@@ -11,18 +11,88 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use stucco_core::Pose2;
 
-/// A room of the plan: a rectangle with its walls along the plan's axes.
-/// Its frame (the one the robot's filter keeps while inside) has its
-/// origin in the south-west corner.
+/// A room of the plan: a rectangle with its walls along the plan's axes,
+/// given by its south-west corner and size or by its corners. Its frame
+/// (the one the robot's filter keeps while inside) has its origin in the
+/// south-west corner.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanRoom {
     /// Its name (tasks and telecommands name rooms by it).
     pub name: String,
-    /// The south-west corner on the plan, m.
+    /// The south-west corner on the plan, m (from `corners` when the
+    /// drawing gives them).
+    #[serde(default)]
     pub origin_m: [f64; 2],
-    /// Its size along x and y, m.
+    /// Its size along x and y, m (from `corners` when the drawing gives
+    /// them).
+    #[serde(default)]
     pub size_m: [f64; 2],
+    /// Its corners as the drawing gives them, counter-clockwise, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub corners: Option<Vec<[f64; 2]>>,
+}
+
+/// A window the drawing gives: a prior of where the robot will find one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanWindow {
+    /// The room whose wall it is in.
+    pub room: String,
+    /// Its middle on the drawing, m.
+    pub at_m: [f64; 2],
+    /// Its width, m.
+    pub width_m: f64,
+    /// Its sill above the floor, m.
+    pub sill_m: f64,
+    /// Its head above the floor, m.
+    pub head_m: f64,
+}
+
+/// Farthest a drawn corner of a rectangle may lie from the rectangle its
+/// corners span, m (the drawing's slack).
+const CORNER_SLACK_M: f64 = 0.05;
+
+/// The rectangle `corners` draw, as `(origin, size)`, or why they are not
+/// one the robot can keep.
+fn rectangle_of(corners: &[[f64; 2]]) -> Result<([f64; 2], [f64; 2]), String> {
+    if corners.len() < 3 || corners.iter().flatten().any(|v| !v.is_finite()) {
+        return Err("three or more corners, each two numbers".into());
+    }
+    let n = corners.len();
+    let twice_area: f64 = (0..n)
+        .map(|i| {
+            let (a, b) = (corners[i], corners[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum();
+    if twice_area <= 0.0 {
+        return Err("the corners must run counter-clockwise and enclose an area".into());
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for c in corners {
+        lo = [lo[0].min(c[0]), lo[1].min(c[1])];
+        hi = [hi[0].max(c[0]), hi[1].max(c[1])];
+    }
+    let boxed = [
+        [lo[0], lo[1]],
+        [hi[0], lo[1]],
+        [hi[0], hi[1]],
+        [lo[0], hi[1]],
+    ];
+    let on_box = n == 4
+        && corners.iter().all(|c| {
+            boxed
+                .iter()
+                .any(|b| (c[0] - b[0]).hypot(c[1] - b[1]) <= CORNER_SLACK_M)
+        });
+    if !on_box {
+        return Err(format!(
+            "a room of {n} corners that is not a rectangle along the drawing's axes: the \
+             robot's room filter and planner keep such rectangles only, for now"
+        ));
+    }
+    Ok((lo, [hi[0] - lo[0], hi[1] - lo[1]]))
 }
 
 /// A door of the plan between two rooms.
@@ -83,6 +153,7 @@ pub struct FloorPlan {
     rooms: Vec<PlanRoom>,
     doors: Vec<PlanDoor>,
     sides: Vec<[DoorSide; 2]>,
+    windows: Vec<PlanWindow>,
 }
 
 /// A plan as written.
@@ -90,12 +161,14 @@ pub struct FloorPlan {
 struct PlanText {
     rooms: Vec<PlanRoom>,
     doors: Vec<PlanDoor>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    windows: Vec<PlanWindow>,
 }
 
 impl TryFrom<PlanText> for FloorPlan {
     type Error = PlanFault;
     fn try_from(t: PlanText) -> Result<Self, PlanFault> {
-        FloorPlan::new(t.rooms, t.doors)
+        FloorPlan::new(t.rooms, t.doors)?.with_windows(t.windows)
     }
 }
 
@@ -104,13 +177,15 @@ impl From<FloorPlan> for PlanText {
         PlanText {
             rooms: p.rooms,
             doors: p.doors,
+            windows: p.windows,
         }
     }
 }
 
 impl FloorPlan {
     /// Checks `rooms` and `doors` and places each door in its rooms' walls.
-    pub fn new(rooms: Vec<PlanRoom>, doors: Vec<PlanDoor>) -> Result<Self, PlanFault> {
+    /// A room given by its `corners` takes its origin and size from them.
+    pub fn new(mut rooms: Vec<PlanRoom>, doors: Vec<PlanDoor>) -> Result<Self, PlanFault> {
         let fault = |table, index, field, why: String| PlanFault {
             table,
             index,
@@ -118,9 +193,25 @@ impl FloorPlan {
             why,
         };
         let mut names = BTreeSet::new();
-        for (i, r) in rooms.iter().enumerate() {
-            if !names.insert(r.name.as_str()) {
+        for (i, r) in rooms.iter_mut().enumerate() {
+            if !names.insert(r.name.clone()) {
                 return Err(fault("room", i, "name", format!("{:?} twice", r.name)));
+            }
+            if let Some(corners) = &r.corners {
+                let (origin, size) =
+                    rectangle_of(corners).map_err(|why| fault("room", i, "corners", why))?;
+                let given = r.size_m != [0.0, 0.0] || r.origin_m != [0.0, 0.0];
+                let same = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9;
+                if given && !(same(r.origin_m, origin) && same(r.size_m, size)) {
+                    return Err(fault(
+                        "room",
+                        i,
+                        "corners",
+                        "give corners, or origin_m and size_m, not both".into(),
+                    ));
+                }
+                r.origin_m = origin;
+                r.size_m = size;
             }
             if !r.size_m.iter().all(|v| v.is_finite() && *v > 0.0) {
                 return Err(fault("room", i, "size_m", "sides must be positive".into()));
@@ -179,7 +270,62 @@ impl FloorPlan {
             rooms,
             doors,
             sides,
+            windows: Vec::new(),
         })
+    }
+
+    /// The plan with the drawing's `windows`, each checked: in a room of
+    /// the plan, within a wall's reach of one of its walls with its width
+    /// inside it, its sill below its head.
+    pub fn with_windows(mut self, windows: Vec<PlanWindow>) -> Result<Self, PlanFault> {
+        let fault = |index, field, why: String| PlanFault {
+            table: "window",
+            index,
+            field,
+            why,
+        };
+        for (i, w) in windows.iter().enumerate() {
+            let Some(room) = self.room(&w.room) else {
+                return Err(fault(i, "room", format!("no room {:?}", w.room)));
+            };
+            if !(w.width_m.is_finite() && w.width_m > 0.0) {
+                return Err(fault(i, "width_m", "must be positive".into()));
+            }
+            if !(w.sill_m.is_finite() && w.sill_m >= 0.0) {
+                return Err(fault(i, "sill_m", "must not be negative".into()));
+            }
+            if !(w.head_m.is_finite() && w.head_m > w.sill_m) {
+                return Err(fault(i, "head_m", "must lie above the sill".into()));
+            }
+            let r = &self.rooms[room];
+            let at = Vector2::new(w.at_m[0] - r.origin_m[0], w.at_m[1] - r.origin_m[1]);
+            let in_wall = WallName::ALL.iter().any(|&wall| {
+                let g = WallGeometry::of(wall, r.size_m);
+                let along = g.position(&at);
+                g.distance(&at).abs() <= DOOR_IN_WALL_M
+                    && along - w.width_m / 2.0 >= 0.0
+                    && along + w.width_m / 2.0 <= g.length_m
+            });
+            if !in_wall {
+                return Err(fault(
+                    i,
+                    "at_m",
+                    format!(
+                        "not within {DOOR_IN_WALL_M} m of a wall of {:?} with its {} m of width \
+                         inside the wall",
+                        w.room, w.width_m
+                    ),
+                ));
+            }
+        }
+        self.windows = windows;
+        Ok(self)
+    }
+
+    /// The windows the drawing gives (a prior: the robot's camera finds
+    /// the windows it plasters round).
+    pub fn windows(&self) -> &[PlanWindow] {
+        &self.windows
     }
 
     /// The rooms.
@@ -337,6 +483,7 @@ mod tests {
             name: name.into(),
             origin_m,
             size_m,
+            corners: None,
         };
         let door = |a: &str, b: &str, at_m| PlanDoor {
             rooms: [a.into(), b.into()],
@@ -394,6 +541,7 @@ mod tests {
             name: "island".into(),
             origin_m: [20.0, 0.0],
             size_m: [2.0, 2.0],
+            corners: None,
         });
         let q = FloorPlan::new(rooms, p.doors().to_vec()).unwrap();
         assert_eq!(q.route(0, 3), None);

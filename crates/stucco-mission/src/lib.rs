@@ -58,12 +58,15 @@ pub use executive::{
 pub use file::{
     BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge, line_of, parse_toml,
 };
-pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom};
+pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom, PlanWindow};
 pub use ledger::{MAX_DEADLINE_AHEAD_S, MAX_ID_BYTES, MAX_KEPT, MAX_OPERATOR_BYTES};
 pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, pose_at_wall};
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{
     FailurePolicy, Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict,
 };
-pub use task::{Landmark, OnTimeout, Region, Side, SpraySettings, TaskSpec, WallName, spray_with};
+pub use task::{
+    AllRooms, Landmark, OnTimeout, Region, Rooms, Side, SpraySettings, TaskSpec, WallName,
+    spray_with,
+};
 pub use tasks::{Effects, Task, TaskCx, TaskFailure, TaskStep, Thaw};

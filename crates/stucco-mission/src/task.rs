@@ -247,6 +247,12 @@ pub enum TaskSpec {
         /// second coat is a task of its own).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         spray: Option<SpraySettings>,
+        /// The drawing's rooms to plaster, one after the other (`"all"`, or
+        /// a list of names): the mission expands it at load into going to
+        /// each room, mapping it and plastering it ([`Rooms`]). Without
+        /// it: the room the robot is in.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rooms: Option<Rooms>,
     },
     /// Stops and waits for the operator's `continue`.
     WaitForOperator {
@@ -261,27 +267,57 @@ pub enum TaskSpec {
     },
 }
 
+/// The rooms a `plaster` task names: every room of the drawing, or these.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Rooms {
+    /// `"all"`: every room of the drawing.
+    All(AllRooms),
+    /// The rooms by name, plastered in the order a route through them
+    /// finds shortest.
+    Named(Vec<String>),
+}
+
+/// The word `all`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AllRooms {
+    /// Every room.
+    All,
+}
+
 impl TaskSpec {
+    /// A `go_to_room` task with a mission file's defaults.
+    pub fn go_to_room(room: &str) -> TaskSpec {
+        TaskSpec::GoToRoom {
+            room: room.to_owned(),
+            approach_m: approach(),
+            beyond_m: beyond(),
+            speed_mps: drive_speed(),
+        }
+    }
+
+    /// A `map_room` task with a mission file's defaults (the loop inside
+    /// the walls).
+    pub fn map_room() -> TaskSpec {
+        TaskSpec::MapRoom {
+            path: None,
+            walls: all_walls(),
+            min_sightings: sightings(),
+            inset_m: survey_inset(),
+            speed_mps: survey_speed(),
+            max_size_sigma_m: size_sigma(),
+            timeout_s: map_timeout(),
+        }
+    }
+
     /// The task a telecommand asks for, with the defaults a mission file
     /// would give it; `None` for commands that are not tasks.
     pub fn from_command(c: &stucco_core::Command) -> Option<TaskSpec> {
         use stucco_core::Command as C;
         Some(match c {
-            C::GoToRoom { room } => TaskSpec::GoToRoom {
-                room: room.clone(),
-                approach_m: approach(),
-                beyond_m: beyond(),
-                speed_mps: drive_speed(),
-            },
-            C::MapRoom => TaskSpec::MapRoom {
-                path: None,
-                walls: all_walls(),
-                min_sightings: sightings(),
-                inset_m: survey_inset(),
-                speed_mps: survey_speed(),
-                max_size_sigma_m: size_sigma(),
-                timeout_s: map_timeout(),
-            },
+            C::GoToRoom { room } => TaskSpec::go_to_room(room),
+            C::MapRoom => TaskSpec::map_room(),
             C::PassDoor { door } => TaskSpec::PassDoor {
                 door: *door,
                 approach_m: approach(),
@@ -336,6 +372,7 @@ impl TaskSpec {
                 survey_speed_mps: survey_loop_speed(),
                 region: *region,
                 spray: None,
+                rooms: None,
             },
             _ => return None,
         })

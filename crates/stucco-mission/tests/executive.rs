@@ -1085,6 +1085,7 @@ fn plaster(survey: bool) -> TaskSpec {
         survey_speed_mps: 0.3,
         region: None,
         spray: None,
+        rooms: None,
     }
 }
 
@@ -1523,6 +1524,7 @@ fn offices() -> FloorPlan {
         name: name.to_owned(),
         origin_m,
         size_m,
+        corners: None,
     };
     let door = |a: &str, b: &str, at_m| PlanDoor {
         rooms: [a.to_owned(), b.to_owned()],
@@ -1818,6 +1820,7 @@ fn apartment() -> FloorPlan {
         name: name.to_owned(),
         origin_m,
         size_m,
+        corners: None,
     };
     let door = |a: &str, b: &str, at_m, width_m| PlanDoor {
         rooms: [a.to_owned(), b.to_owned()],

@@ -316,6 +316,8 @@ impl TaskSpec {
                 survey_speed_mps,
                 region,
                 spray,
+                // Expanded at load into a task a room (`Mission::parse`).
+                rooms: _,
             } => Box::new(plaster::Plaster::new(plaster::PlasterSpec {
                 walls,
                 ceiling,

@@ -450,8 +450,17 @@ fn survey_rect(
     (x1 - x0 >= min_side && y1 - y0 >= min_side).then_some([[x1, y0], [x0, y0], [x0, y1], [x1, y1]])
 }
 
+/// Least distance a default loop keeps from the walls, m: the body's half
+/// width and a protective field's margin.
+const LOOP_WALL_MIN_M: f64 = 0.5;
+/// How far apart the two sides of a default loop squeezed into a narrow
+/// room stand, m.
+const NARROW_LOOP_M: f64 = 0.1;
+
 /// The survey loop: the given path or a rectangle `inset_m` inside the
-/// room.
+/// room; in a room narrower than twice that (a hall, a corridor), a
+/// rectangle along its middle, `NARROW_LOOP_M` across, driven corner to
+/// corner.
 fn survey_loop(
     path: Option<&[[f64; 2]]>,
     inset_m: f64,
@@ -461,7 +470,9 @@ fn survey_loop(
         return Ok(p.to_vec());
     }
     let [xs, ys] = room_m;
-    if 2.0 * inset_m >= xs.min(ys) {
+    let narrow = 0.5 * (xs.min(ys) - NARROW_LOOP_M);
+    let inset_m = inset_m.min(narrow);
+    if inset_m < LOOP_WALL_MIN_M || 2.0 * inset_m >= xs.max(ys) {
         return Err(TaskFailure::NoLoop { inset_m, room_m });
     }
     Ok(vec![
@@ -501,4 +512,34 @@ fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
     p.push(a);
     p.push(mid);
     p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_loop_squeezes_into_a_hall_and_gives_up_where_the_body_cannot_pass() {
+        // A room: the loop 1 m inside its walls.
+        let open = survey_loop(None, 1.0, [5.0, 4.0]).unwrap_or_default();
+        assert_eq!(open, [[1.0, 1.0], [4.0, 1.0], [4.0, 3.0], [1.0, 3.0]]);
+        // A 1.6 m hall: along its middle, 10 cm across.
+        let hall = survey_loop(None, 1.0, [5.5, 1.6]).unwrap_or_default();
+        assert_eq!(hall.len(), 4);
+        for [x, y] in hall {
+            assert!((0.75 - 1e-9..=4.75 + 1e-9).contains(&x), "{x}");
+            assert!((y - 0.75).abs() < 1e-9 || (y - 0.85).abs() < 1e-9, "{y}");
+        }
+        // Narrower than the body and its field: no loop.
+        assert!(matches!(
+            survey_loop(None, 1.0, [5.0, 1.0]),
+            Err(TaskFailure::NoLoop { .. })
+        ));
+        // A loop given is driven as given.
+        let given = [[0.5, 0.5], [1.0, 0.5]];
+        assert_eq!(
+            survey_loop(Some(&given), 1.0, [1.2, 1.2]).unwrap_or_default(),
+            given
+        );
+    }
 }
