@@ -80,6 +80,10 @@ pub struct SafetyConfig {
     pub link_timeout_s: f64,
     /// What a scripted task's failure does to the mission.
     pub on_task_failure: FailurePolicy,
+    /// With nobody there, a touch (the bumper) holds the robot, the spray
+    /// off, until the bumper has been free for `clear_s`; the task fails
+    /// when the touches go on this long, s.
+    pub touch_timeout_s: f64,
 }
 
 impl Default for SafetyConfig {
@@ -98,6 +102,7 @@ impl Default for SafetyConfig {
             on_link_loss: LinkLossPolicy::Pause,
             link_timeout_s: 1.0,
             on_task_failure: FailurePolicy::Stop,
+            touch_timeout_s: 60.0,
         }
     }
 }
@@ -121,6 +126,7 @@ impl SafetyConfig {
             ("spray_max_sigma_m", positive(self.spray_max_sigma_m)),
             ("blocked_timeout_s", positive(self.blocked_timeout_s)),
             ("link_timeout_s", positive(self.link_timeout_s)),
+            ("touch_timeout_s", positive(self.touch_timeout_s)),
         ];
         checks
             .into_iter()

@@ -113,6 +113,7 @@ impl Robot {
 struct Seen<'a> {
     obstacles: &'a [Point2<f64>],
     unseen: &'a [Point2<f64>],
+    bumper: bool,
     estop: bool,
     operator: &'a [OperatorCommand],
     telecommands: &'a [Telecommand],
@@ -139,7 +140,7 @@ fn ask(exec: &mut Executive, robot: &Robot, seen: Seen) -> Outputs {
             estimate: &est,
             obstacles: seen.obstacles,
             unseen: seen.unseen,
-            bumper: false,
+            bumper: seen.bumper,
             estop: seen.estop,
             operator: seen.operator,
             telecommands: seen.telecommands,
@@ -544,6 +545,71 @@ fn an_obstacle_stops_the_robot_and_a_lasting_one_fails_the_task() {
     );
     assert!(matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("blocked")));
     assert!(kinds(&events).iter().any(|k| k == "safety_stop"));
+}
+
+/// With nobody there, a touch (a person walking into the robot) holds it,
+/// the spray off, and it goes on by itself once the bumper has been free a
+/// while; touches that go on past the mission's timeout fail the task.
+#[test]
+fn a_touch_with_nobody_there_holds_the_robot_until_it_is_free() {
+    let touched = |exec: &mut Executive, robot: &Robot, bumper: bool| {
+        ask(
+            exec,
+            robot,
+            Seen {
+                bumper,
+                ..Seen::default()
+            },
+        )
+    };
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(vec![forward(2.0)], true);
+    let mut events = Vec::new();
+    for k in 0..(60.0 / DT) as usize {
+        // Touched for a second, 2 s into the move.
+        let bumper = (100..150).contains(&k);
+        let out = touched(&mut exec, &robot, bumper);
+        if bumper || (150..(150 + (0.5 / DT) as usize - 1)).contains(&k) {
+            assert_eq!(out.drive, DriveCommand::STOP, "tick {k}");
+            assert!(!out.tool.spray);
+            assert_eq!(exec.hazard(), Some(Hazard::Touch), "tick {k}");
+        }
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{events:?}");
+    assert!((robot.pose.x - 3.0).abs() < 0.05, "{:?}", robot.pose);
+    let touches = events
+        .iter()
+        .filter(|e| {
+            matches!(
+                e.kind,
+                EventKind::SafetyStop {
+                    hazard: Hazard::Touch
+                }
+            )
+        })
+        .count();
+    assert_eq!(touches, 1, "{events:?}");
+    // A touch that does not end: the task fails after the timeout.
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(vec![forward(2.0)], true);
+    let timeout = SafetyConfig::default().touch_timeout_s;
+    let mut failed_at = None;
+    for k in 0..((timeout + 10.0) / DT) as usize {
+        let out = touched(&mut exec, &robot, k >= 50);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            failed_at = Some(k as f64 * DT - 1.0);
+            break;
+        }
+    }
+    let t = failed_at.expect("failed");
+    assert!((t - timeout).abs() < 0.1, "failed after {t} s");
+    assert!(matches!(exec.mode(), MissionMode::Failed { .. }));
 }
 
 #[test]

@@ -176,6 +176,9 @@ pub enum Hazard {
     Obstacle,
     /// The pose estimate is too uncertain to drive on.
     Lost,
+    /// Something touched the robot (its bumper): it stands, the spray
+    /// off, until the touch has been gone a while.
+    Touch,
 }
 
 impl Hazard {
@@ -184,6 +187,7 @@ impl Hazard {
         match self {
             Hazard::Obstacle => "obstacle",
             Hazard::Lost => "lost",
+            Hazard::Touch => "touch",
         }
     }
 }

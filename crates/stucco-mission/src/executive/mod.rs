@@ -166,6 +166,9 @@ pub struct Executive {
     last_tick: Option<Stamp>,
     hazard: Option<Hazard>,
     lost_since: Option<Stamp>,
+    /// A touch holding the robot with nobody there: when the touches
+    /// began, and the last one.
+    touch: Option<(Stamp, Stamp)>,
     continue_asked: bool,
     /// True for the tasks of the mission file (a checkpoint keeps those),
     /// false for the operator's.
@@ -213,6 +216,7 @@ impl Executive {
             last_tick: None,
             hazard: None,
             lost_since: None,
+            touch: None,
             continue_asked: false,
             scripted: vec![true; n],
             ledger: Ledger::default(),
@@ -434,8 +438,15 @@ impl Executive {
         }
         if inputs.bumper && self.mode == MissionMode::Running {
             if self.config.unattended {
-                self.fail(now, TaskFailure::Bumper);
-                checkpoint_due = true;
+                // Held where it is (a person walking into it, a hand on
+                // it); the task fails only when the touches go on.
+                let since = self.touch.map_or(now, |(since, _)| since);
+                self.touch = Some((since, now));
+                if now.seconds_since(since) > self.config.safety.touch_timeout_s {
+                    self.touch = None;
+                    self.fail(now, TaskFailure::Bumper);
+                    checkpoint_due = true;
+                }
             } else {
                 self.pause(now, "bumper: the robot touched something".to_owned());
             }
@@ -595,8 +606,17 @@ impl Executive {
         let verdict =
             self.supervisor
                 .check(cmd, inputs.obstacles, inputs.unseen, inputs.estimate, dt);
-        self.note_hazard(now, verdict.hazard);
         let safety = self.config.safety.clone();
+        // A touch holds the robot until the bumper has been free for the
+        // field's clearing time; its timers stand meanwhile.
+        if let Some((_, last)) = self.touch {
+            if now.seconds_since(last) < safety.clear_s.max(dt) {
+                self.note_hazard(now, Some(Hazard::Touch));
+                return DriveCommand::STOP;
+            }
+            self.touch = None;
+        }
+        self.note_hazard(now, verdict.hazard);
         match verdict.hazard {
             Some(Hazard::Lost) => {
                 let since = *self.lost_since.get_or_insert(now);
@@ -641,6 +661,8 @@ impl Executive {
                     a.blocked_s = 0.0;
                 }
             }
+            // The bumper's, held above: the field does not tell it.
+            Some(Hazard::Touch) => {}
         }
         if self.mode == MissionMode::Running {
             verdict.drive
