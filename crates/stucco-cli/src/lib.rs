@@ -19,6 +19,7 @@
 //!   `stucco op` console.
 #![warn(missing_docs)]
 
+mod buildings;
 mod carmen;
 mod experiments;
 mod floor;
@@ -39,6 +40,7 @@ mod study_plot;
 mod task_mission;
 mod walls;
 
+pub use buildings::{BuildingRow, buildings_table, run_buildings};
 pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
 pub use floor::{FloorRun, map_floor};

@@ -271,6 +271,23 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Generate buildings and run each one's job (plaster every room) in
+    /// the simulator, seeds in parallel; print a row a building: its
+    /// rooms, the job's outcome and its true scores.
+    Buildings {
+        /// The first seed.
+        #[arg(long, default_value_t = 0)]
+        from: u64,
+        /// How many seeds.
+        #[arg(long, default_value_t = 10)]
+        count: u64,
+        /// Folder for the buildings and their jobs (`DIR/seed-N`).
+        #[arg(long)]
+        out: PathBuf,
+        /// Print the rows as one JSON array on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Generate a building nobody has seen: `DIR/world.toml` (the truth),
     /// `DIR/plan.toml` (its drawing, exact or off by up to 3 cm) and
     /// `DIR/mission.toml` (plaster every room, nothing else).
@@ -1443,6 +1460,22 @@ fn main() -> ExitCode {
             json,
         ),
         Command::Bench { action } => bench(action),
+        Command::Buildings {
+            from,
+            count,
+            out,
+            json,
+        } => match stucco_cli::run_buildings(from..from.saturating_add(count), &out) {
+            Ok(rows) if json => print_json(&rows),
+            Ok(rows) => {
+                print!("{}", stucco_cli::buildings_table(&rows));
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Worldgen { seed, out } => match worldgen(seed, &out) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {

@@ -38,3 +38,23 @@ fn worldgen_writes_a_world_its_drawing_and_a_job() {
         );
     }
 }
+
+#[test]
+fn the_buildings_study_runs_each_job_or_says_why_it_could_not() {
+    let dir = tempfile::tempdir().unwrap();
+    // Seeds 0 and 1: rooms of shapes the robot does not keep yet.
+    let rows = stucco_cli::run_buildings(0..2, dir.path()).unwrap();
+    assert_eq!(rows.iter().map(|r| r.seed).collect::<Vec<_>>(), [0, 1]);
+    for r in &rows {
+        assert_eq!(r.outcome, "refused", "{r:?}");
+        let why = r.reason.as_deref().unwrap();
+        assert!(
+            why.contains("plan.toml:") && why.contains("corners"),
+            "{why}"
+        );
+        assert!(r.dir.join("world.toml").exists());
+    }
+    let table = stucco_cli::buildings_table(&rows);
+    assert_eq!(table.lines().count(), 4, "{table}");
+    assert!(table.ends_with("0 of 2 jobs done\n"), "{table}");
+}
