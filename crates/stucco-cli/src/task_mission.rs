@@ -142,6 +142,8 @@ fn rooms_left(
             floor_m2: r.size_m[0] * r.size_m[1],
             why: if plan.doors_of(i).next().is_none() {
                 "no open door leads there".to_owned()
+            } else if mission.plaster_rooms().contains(&r.name) {
+                "the job ended before it".to_owned()
             } else {
                 "no plaster task".to_owned()
             },

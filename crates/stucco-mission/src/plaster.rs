@@ -95,6 +95,9 @@ pub(crate) struct PlasterRun {
     /// The way to the current station was not found clear as the map
     /// holds it (it is driven all the same, the supervisor watching).
     pub way_unchecked: bool,
+    /// Stations of this plan given up, and the area only they reached,
+    /// m².
+    pub given_up: (usize, f64),
 }
 
 impl PlasterRun {
@@ -109,7 +112,14 @@ impl PlasterRun {
             resume_s: 0.0,
             unsaved_s: 0.0,
             way_unchecked: false,
+            given_up: (0, 0.0),
         }
+    }
+
+    /// True when every station of the plan was given up: none is left and
+    /// some were (a plan reaching nothing is not one given up).
+    pub fn all_given_up(&self) -> bool {
+        self.plan.stations.is_empty() && self.given_up.0 > 0
     }
 
     /// Gives up the current station, which the robot cannot get to: the
@@ -123,6 +133,7 @@ impl PlasterRun {
         self.retries = 0;
         self.digest = plan_digest(&self.plan);
         self.way_unchecked = false;
+        self.given_up = (self.given_up.0 + 1, self.given_up.1 + lost);
         Some(lost)
     }
 

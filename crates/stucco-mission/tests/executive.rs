@@ -2019,26 +2019,7 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
     cfg.safety.obstacle_margin_m = 0.03;
     cfg.safety.lateral_margin_m = 0.02;
     let mut exec = Executive::new(cfg, vec![plaster(false)]);
-    // The hall's walls as the laser sees them (hall frame), every 2 cm,
-    // with the rooms beyond the open doors 1.6 m back.
-    let line = |a: [f64; 2], b: [f64; 2]| {
-        let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.02).ceil() as usize;
-        (0..=n).map(move |k| {
-            let t = k as f64 / n as f64;
-            Point2::new(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))
-        })
-    };
-    let walls: Vec<Point2<f64>> = line([0.0, 0.0], [3.1, 0.0])
-        .chain(line([4.0, 0.0], [6.2, 0.0]))
-        .chain(line([7.0, 0.0], [8.0, 0.0]))
-        .chain(line([0.0, 1.2], [3.0, 1.2]))
-        .chain(line([3.8, 1.2], [8.0, 1.2]))
-        .chain(line([0.0, 0.0], [0.0, 1.2]))
-        .chain(line([8.0, 0.0], [8.0, 1.2]))
-        .chain(line([3.1, -1.6], [4.0, -1.6]))
-        .chain(line([6.2, -1.6], [7.0, -1.6]))
-        .chain(line([3.0, 2.8], [3.8, 2.8]))
-        .collect();
+    let walls = hall_walls();
     let (mut first_plan, mut last_plan, mut given_up, mut passes) = (None, None, Vec::new(), 0);
     let mut closest = f64::INFINITY;
     for _ in 0..(4000.0 / DT) as usize {
@@ -2134,6 +2115,87 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
     );
     println!("closest to a wall: {closest:.3} m; given up: {given_up:?}");
     assert!(closest >= 0.01, "{closest}");
+}
+
+/// The apartment's hall's walls as the laser sees them (hall frame), every
+/// 2 cm, with the rooms beyond the open doors 1.6 m back.
+fn hall_walls() -> Vec<Point2<f64>> {
+    let line = |a: [f64; 2], b: [f64; 2]| {
+        let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.02).ceil() as usize;
+        (0..=n).map(move |k| {
+            let t = k as f64 / n as f64;
+            Point2::new(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))
+        })
+    };
+    line([0.0, 0.0], [3.1, 0.0])
+        .chain(line([4.0, 0.0], [6.2, 0.0]))
+        .chain(line([7.0, 0.0], [8.0, 0.0]))
+        .chain(line([0.0, 1.2], [3.0, 1.2]))
+        .chain(line([3.8, 1.2], [8.0, 1.2]))
+        .chain(line([0.0, 0.0], [0.0, 1.2]))
+        .chain(line([8.0, 0.0], [8.0, 1.2]))
+        .chain(line([3.1, -1.6], [4.0, -1.6]))
+        .chain(line([6.2, -1.6], [7.0, -1.6]))
+        .chain(line([3.0, 2.8], [3.8, 2.8]))
+        .collect()
+}
+
+/// Plastering only the hall's end walls, which no way turns the robot to
+/// face: every station is given up, and the task fails saying so, never
+/// done.
+#[test]
+fn a_plaster_task_whose_stations_are_all_given_up_fails_saying_why() {
+    let plan = apartment();
+    let mut robot = Robot::at(Pose2::new(3.4, 0.6, 0.0));
+    robot.in_room(&plan, 2);
+    let mut cfg = config(true);
+    cfg.spray = Some(stucco_plan::SprayTool::default());
+    cfg.floor = Some(plan.clone());
+    cfg.safety.obstacle_margin_m = 0.03;
+    cfg.safety.lateral_margin_m = 0.02;
+    let mut task = plaster(false);
+    if let TaskSpec::Plaster { walls, ceiling, .. } = &mut task {
+        *walls = vec![WallName::East, WallName::West];
+        *ceiling = false;
+    }
+    let mut exec = Executive::new(cfg, vec![task]);
+    let walls = hall_walls();
+    let mut given_up = 0;
+    for _ in 0..(2000.0 / DT) as usize {
+        let to_robot = robot.pose.inverse();
+        let seen: Vec<Point2<f64>> = walls
+            .iter()
+            .map(|p| to_robot.transform_point(p))
+            .filter(|p| p.coords.norm() < 3.0)
+            .collect();
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        given_up += out
+            .events
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::StationGivenUp { .. }))
+            .count();
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert!(given_up > 0);
+    assert!(
+        matches!(exec.mode(), MissionMode::Failed { .. }),
+        "{:?}",
+        exec.mode()
+    );
+    match exec.failure() {
+        Some(stucco_mission::TaskFailure::AllStationsGivenUp {
+            stations,
+            unreachable_m2,
+        }) => {
+            assert_eq!(*stations, given_up);
+            // Both end walls less their edges, 2.4 m² each.
+            assert!((4.6..5.0).contains(unreachable_m2), "{unreachable_m2}");
+        }
+        other => panic!("{other:?}: {:?}", exec.status()),
+    }
 }
 
 /// How far the body's outline keeps off the walls of its room and off

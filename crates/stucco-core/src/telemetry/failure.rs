@@ -123,6 +123,14 @@ pub enum TaskFailure {
         /// The planner's words.
         error: String,
     },
+    /// `plaster`: no way reached any of the plan's stations: every one
+    /// was given up and nothing was plastered.
+    AllStationsGivenUp {
+        /// The stations given up.
+        stations: usize,
+        /// The plasterable area they were to reach, m².
+        unreachable_m2: f64,
+    },
     /// `plaster`: a checkpoint's plan is missing.
     CheckpointPlanMissing {
         /// The station the checkpoint stopped at.
@@ -176,6 +184,7 @@ impl TaskFailure {
             TaskFailure::NoSprayTool => "no_spray_tool",
             TaskFailure::NoPlan => "no_plan",
             TaskFailure::Planning { .. } => "planning",
+            TaskFailure::AllStationsGivenUp { .. } => "all_stations_given_up",
             TaskFailure::CheckpointPlanMissing { .. } => "checkpoint_plan_missing",
             TaskFailure::CheckpointPlanDiffers { .. } => "checkpoint_plan_differs",
             TaskFailure::NotFacingSurface { .. } => "not_facing_surface",
@@ -265,6 +274,14 @@ impl std::fmt::Display for TaskFailure {
             TaskFailure::NoSprayTool => write!(f, "plaster: the mission has no [spray] tool"),
             TaskFailure::NoPlan => write!(f, "plaster: no plan"),
             TaskFailure::Planning { error } => write!(f, "plaster: {error}"),
+            TaskFailure::AllStationsGivenUp {
+                stations,
+                unreachable_m2,
+            } => write!(
+                f,
+                "plaster: no way reached any of its {stations} stations: nothing plastered \
+                 ({unreachable_m2:.1} m² left unreachable)"
+            ),
             TaskFailure::CheckpointPlanMissing { station } => write!(
                 f,
                 "plaster: the checkpoint stopped at station {station} but the plan it was \

@@ -158,6 +158,13 @@ impl Task for Plaster {
         let Some(run) = self.run.as_mut() else {
             return TaskStep::Failed(TaskFailure::NoPlan);
         };
+        // Never done when nothing could be reached: the job says why.
+        if run.all_given_up() {
+            return TaskStep::Failed(TaskFailure::AllStationsGivenUp {
+                stations: run.given_up.0,
+                unreachable_m2: run.given_up.1,
+            });
+        }
         if run.finished() && !matches!(run.phase, Phase::Leaving) {
             return TaskStep::Done;
         }
