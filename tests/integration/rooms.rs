@@ -74,3 +74,94 @@ fn go_to_room_takes_the_robot_through_the_apartments_narrow_hall() {
         assert!(r.pose_rms_m < 0.03, "seed {}: {} m", r.seed, r.pose_rms_m);
     }
 }
+
+/// Glazing down to 15 cm in a room with a drawing: the laser sees
+/// through the glass as through a doorway, but the drawing gives the
+/// doors: the glazing is never taken for one.
+#[test]
+fn glazing_near_the_floor_is_not_taken_for_a_door_where_the_drawing_has_none() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
+    write(
+        "world.toml",
+        r#"name = "glazed office"
+seed = 3
+
+[robot]
+at = [1.2, 1.0]
+heading_deg = 0.0
+
+[[room]]
+name = "office"
+corners = [[0.0, 0.0], [5.0, 0.0], [5.0, 4.0], [0.0, 4.0]]
+
+[[room]]
+name = "hall"
+corners = [[5.15, 0.0], [7.0, 0.0], [7.0, 4.0], [5.15, 4.0]]
+shared_walls = [3]
+
+[[door]]
+room = "office"
+wall = 1
+offset_m = 1.5
+width_m = 0.9
+
+# Glazing from 15 cm up in the north wall, the laser's plane (30 cm)
+# crossing it.
+[[window]]
+room = "office"
+wall = 2
+offset_m = 1.5
+width_m = 2.0
+sill_m = 0.15
+head_m = 2.2
+glazed = true
+"#,
+    );
+    write(
+        "mission.toml",
+        r#"name = "map a glazed office"
+world = "world.toml"
+seed = 3
+people = false
+
+[start]
+room = "office"
+
+[[room]]
+name = "office"
+corners = [[0.0, 0.0], [5.0, 0.0], [5.0, 4.0], [0.0, 4.0]]
+
+[[room]]
+name = "hall"
+corners = [[5.15, 0.0], [7.0, 0.0], [7.0, 4.0], [5.15, 4.0]]
+
+[[door]]
+rooms = ["office", "hall"]
+at_m = [5.075, 1.95]
+width_m = 0.9
+
+[[task]]
+task = "map_room"
+"#,
+    );
+    let s = run_task_mission(
+        &TaskMissionJob {
+            mission: dir.path().join("mission.toml"),
+            seed: None,
+            runs: None,
+            out: None,
+            resume: false,
+            stop_after_s: None,
+            record: false,
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let r = &s.runs[0];
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    // The drawing's door, and no other.
+    assert_eq!(r.doors.len(), 1, "{:?}", r.doors);
+    assert_eq!(r.doors[0].wall, stucco_core::WallName::East);
+    assert!(r.doors[0].error_m < 0.05, "{:?}", r.doors);
+}

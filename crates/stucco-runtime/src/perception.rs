@@ -912,8 +912,16 @@ impl Perception {
     }
 
     /// Counts the openings seen where the filter knows no door; one seen
-    /// `DOOR_SIGHTINGS` times in the same place of a wall becomes a door.
+    /// `DOOR_SIGHTINGS` times in the same place of a wall becomes a door
+    /// (without a drawing: with one, the drawing's doors are the doors).
     fn note_openings(&mut self, openings: &[DoorOpening]) {
+        // With the building's drawing, its doors are the doors: a gap the
+        // laser sees elsewhere is glazing it sees through (at a slant
+        // glass lets the beam by), a window low enough for the laser's
+        // plane, or a gap between pieces of furniture.
+        if self.plan.is_some() {
+            return;
+        }
         let est = self.mission_estimate();
         let laser = est.pose * self.mount;
         for o in openings {
