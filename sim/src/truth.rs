@@ -20,7 +20,7 @@
 
 use crate::deposition::{Coat, SurfaceKind};
 use crate::grid::CellGrid;
-use crate::layout::{Layout, Solid};
+use crate::layout::{Layout, OpeningKind, Solid};
 use crate::space::SpaceCaster;
 use nalgebra::{Point2, Vector2};
 use serde::Serialize;
@@ -86,14 +86,10 @@ pub struct Tally {
 
 impl Tally {
     /// Covered share of the area not blocked, %: what the robot could
-    /// reach and did (100 when nothing could be reached).
-    pub fn coverage_pct(&self) -> f64 {
+    /// reach and did; none when it could reach nothing.
+    pub fn coverage_pct(&self) -> Option<f64> {
         let open = self.plasterable_m2 - self.blocked_m2;
-        if open <= 1e-9 {
-            100.0
-        } else {
-            (100.0 * self.covered_m2 / open).min(100.0)
-        }
+        (open > 1e-9).then(|| (100.0 * self.covered_m2 / open).min(100.0))
     }
 
     fn add(&mut self, o: &Tally) {
@@ -122,8 +118,9 @@ pub struct Blocker {
     pub room: String,
     /// The surface.
     pub surface: SurfaceKind,
-    /// What blocks it (`table`, `box`, …), or none: the room's own shape
-    /// or height (a corner too tight for the body, a wall above the lift).
+    /// What blocks it (`table`, `box`, …, or [`SHUT_DOOR`] for a room the
+    /// robot cannot get into), or none: the room's own shape or height (a
+    /// corner too tight for the body, a wall above the lift).
     pub what: Option<&'static str>,
     /// Where it stands (the middle of its footprint), m.
     pub at: Option<[f64; 2]>,
@@ -174,6 +171,19 @@ pub fn score_truth(
             SurfaceKind::Wall { .. } => world.wall_cells(coat, finish),
             SurfaceKind::Ceiling => world.ceiling_cells(coat, &room.corners, room.height_m, finish),
         };
+        // A room the robot cannot get into at all (a shut door, a way too
+        // narrow): every blocked cell is put to its shut door, if it has
+        // one.
+        let shut_door = (!world.enterable(&room.corners)).then(|| {
+            layout
+                .openings
+                .iter()
+                .find(|o| o.room == coat.room && o.kind == OpeningKind::ClosedDoor)
+                .map(|o| {
+                    let m = nalgebra::center(&o.edges[0], &o.edges[1]);
+                    [m.x, m.y]
+                })
+        });
         let area = coat.grid.cell_area_m2();
         let mut tally = Tally::default();
         for cell in &cells {
@@ -183,9 +193,12 @@ pub fn score_truth(
                 Cell::Unreached => tally.unreached_m2 += area,
                 Cell::Blocked(by) => {
                     tally.blocked_m2 += area;
-                    let (what, at) = match by {
-                        Some(k) => (Some(layout.pieces[*k].what), Some(layout.pieces[*k].at)),
-                        None => (None, None),
+                    let (what, at) = match (shut_door, by) {
+                        (Some(door), _) => (door.map(|_| SHUT_DOOR), door),
+                        (None, Some(k)) => {
+                            (Some(layout.pieces[*k].what), Some(layout.pieces[*k].at))
+                        }
+                        (None, None) => (None, None),
                     };
                     match blocked
                         .iter_mut()
@@ -217,6 +230,10 @@ pub fn score_truth(
     out.blockers = blocked;
     out
 }
+
+/// What a blocker is when it is the shut door of a room the robot cannot
+/// get into.
+pub const SHUT_DOOR: &str = "shut door";
 
 /// A plasterable cell's lot.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -561,6 +578,18 @@ impl<'a> World<'a> {
         }
         lattice.reached = reached;
         lattice
+    }
+
+    /// True when the robot can get into the room of `corners`: a pose it
+    /// gets to stands in it.
+    fn enterable(&self, corners: &[Point2<f64>]) -> bool {
+        let l = &self.lattice;
+        l.reached.iter().enumerate().any(|(k, &r)| {
+            r && {
+                let cell = k / HEADINGS;
+                inside(corners, &l.centre(cell % l.cells[0], cell / l.cells[0]))
+            }
+        })
     }
 
     /// True when the robot can stand at `pose`: on floor it can get to,

@@ -102,7 +102,7 @@ fn shape(rng: &mut ChaCha8Rng, w: f64, d: f64) -> Shape {
     // Arms and stems at least this wide, m.
     let arm = 1.4;
     match rng.random_range(0..5) {
-        1 if w >= 2.0 * arm && d >= 2.0 * arm => {
+        1 if w > 2.0 * arm && d > 2.0 * arm => {
             // L: a far corner cut away.
             let (a, b) = (
                 rng.random_range(arm..w - arm),
@@ -126,7 +126,7 @@ fn shape(rng: &mut ChaCha8Rng, w: f64, d: f64) -> Shape {
                 door_span: [0.0, w],
             }
         }
-        2 if w >= 3.0 * arm && d >= 2.0 * arm => {
+        2 if w > 3.0 * arm && d > 2.0 * arm => {
             // T: a bar along the far side, a stem to the corridor.
             let stem = rng.random_range(arm..(w - 2.0 * 0.5).min(0.6 * w).max(arm + 0.01));
             let x0 = rng.random_range(0.5..(w - stem - 0.5).max(0.51));
@@ -516,10 +516,17 @@ fn furnish(rng: &mut ChaCha8Rng, world: &mut WorldSpec, r: &Placed, door: Option
                     at + Vector2::new(c * x - s * y, s * x + c * y)
                 })
                 .collect();
+            // Inside the room: every corner of the footprint in it, and no
+            // wall through it (an L's inner corner can stand in a turned
+            // bed whose corners are all in the room).
             let inside_room = feet.iter().all(|f| {
                 crate::truth::inside(&r.corners, f)
                     && crate::truth::edge_distance(&r.corners, f) >= 0.005
-            });
+            }) && !r.corners.iter().any(|c| crate::truth::inside(&feet, c))
+                && !(0..4).any(|i| {
+                    let (a, b) = (feet[i], feet[(i + 1) % 4]);
+                    (0..m).any(|j| crosses(a, b, r.corners[j], r.corners[(j + 1) % m]))
+                });
             let clear_of_others = taken
                 .iter()
                 .all(|(p, q)| (p - at).norm() >= q + radius + 0.15);
@@ -563,6 +570,16 @@ fn furnish(rng: &mut ChaCha8Rng, world: &mut WorldSpec, r: &Placed, door: Option
             break;
         }
     }
+}
+
+/// True when the segments `a`–`b` and `c`–`d` cross.
+fn crosses(a: Point2<f64>, b: Point2<f64>, c: Point2<f64>, d: Point2<f64>) -> bool {
+    let side = |p: Point2<f64>, q: Point2<f64>, r: Point2<f64>| {
+        (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x)
+    };
+    let (d1, d2) = (side(c, d, a), side(c, d, b));
+    let (d3, d4) = (side(a, b, c), side(a, b, d));
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
 }
 
 /// A point of room `r` 0.5 m or more from its walls and clear of what

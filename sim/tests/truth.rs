@@ -107,8 +107,8 @@ fn a_room_coated_all_over_is_covered_all_over_and_nothing_else_counts() {
         s.ceilings
     );
     assert_eq!(s.walls.covered_m2, s.walls.plasterable_m2);
-    assert_eq!(s.walls.coverage_pct(), 100.0);
-    assert_eq!(s.ceilings.coverage_pct(), 100.0);
+    assert_eq!(s.walls.coverage_pct(), Some(100.0));
+    assert_eq!(s.ceilings.coverage_pct(), Some(100.0));
     assert!(s.blockers.is_empty());
     // A room the job does not name is not scored.
     let (layout, coats) = coats(&world(ROOM, ""), everywhere);
@@ -131,7 +131,7 @@ fn a_bare_empty_room_is_all_unreached_none_of_it_blocked() {
     assert!(s.walls.blocked_m2 < 1e-9, "{:?}", s.blockers);
     assert!(s.ceilings.blocked_m2 < 1e-9, "{:?}", s.blockers);
     assert!(near(s.walls.unreached_m2, s.walls.plasterable_m2, 1e-9));
-    assert_eq!(s.walls.coverage_pct(), 0.0);
+    assert_eq!(s.walls.coverage_pct(), Some(0.0));
 }
 
 #[test]
@@ -169,7 +169,7 @@ fn a_wardrobe_against_a_wall_blocks_the_wall_behind_it_and_is_named() {
         }
     };
     let s = score(&w, blocked_wall);
-    assert!(s.walls.coverage_pct() > 99.5, "{:?}", s.walls);
+    assert!(s.walls.coverage_pct() > Some(99.5), "{:?}", s.walls);
     assert!(s.walls.unreached_m2 < 0.05, "{:?}", s.walls);
 }
 
@@ -307,4 +307,42 @@ fn a_corridors_end_walls_are_blocked_for_a_robot_that_cannot_turn_across_it() {
     let room = "[[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [6.0, 0.0], [6.0, 2.0], [0.0, 2.0]]\nheight_m = 2.6\n";
     let s = score(&world(room, ""), |_, _| {});
     assert!(s.walls.blocked_m2 < 1e-9, "{:?}", s.blockers);
+}
+
+#[test]
+fn a_room_behind_a_shut_door_is_blocked_by_that_door_and_has_no_coverage() {
+    // The robot in a hall; the room beyond a shut door.
+    let rooms = "[[room]]\nname = \"hall\"\ncorners = [[0.0, -2.0], [5.0, -2.0], [5.0, -0.15], [0.0, -0.15]]\n\
+        [[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [5.0, 0.0], [5.0, 4.0], [0.0, 4.0]]\nheight_m = 2.6\nshared_walls = [0]\n";
+    let mut w = world(
+        rooms,
+        "[[door]]\nroom = \"hall\"\nwall = 2\noffset_m = 2.0\nwidth_m = 0.9\nopen = false\n",
+    );
+    w.robot.at = [1.0, -1.0];
+    let s = score(&w, |_, _| {});
+    assert!(s.walls.plasterable_m2 > 30.0);
+    assert_eq!(s.walls.blocked_m2, s.walls.plasterable_m2);
+    assert_eq!(s.walls.coverage_pct(), None);
+    assert!(
+        s.blockers
+            .iter()
+            .all(|b| b.what == Some(stucco_sim::SHUT_DOOR)),
+        "{:?}",
+        s.blockers
+    );
+    // The door's middle: 2.45 m along the hall's north wall from its
+    // east end.
+    let at = s.blockers[0].at.unwrap_or_default();
+    assert!(
+        (at[0] - 2.55).abs() < 1e-9 && (at[1] - 0.0).abs() < 0.2,
+        "{at:?}"
+    );
+    // Open, the room is reached.
+    w.doors[0].open = true;
+    let s = score(&w, |_, _| {});
+    assert!(
+        s.walls.blocked_m2 < 0.05 * s.walls.plasterable_m2,
+        "{:?}",
+        s.blockers
+    );
 }

@@ -80,10 +80,38 @@ fn every_building_is_a_world_within_its_ranges() {
         let layout = Layout::of(&w);
         for piece in &layout.pieces {
             let p = Point2::new(piece.at[0], piece.at[1]);
-            assert!(
-                layout.rooms.iter().any(|r| inside(&r.corners, &p)),
-                "seed {seed}: {piece:?}"
-            );
+            let room = layout
+                .rooms
+                .iter()
+                .find(|r| inside(&r.corners, &p))
+                .unwrap_or_else(|| panic!("seed {seed}: {piece:?}"));
+            // Its whole footprint in that room, and no corner of the room
+            // standing in it (a wall through it).
+            for solid in &layout.solids[piece.solids.clone()] {
+                let stucco_sim::Solid::Box {
+                    center,
+                    half,
+                    yaw_rad,
+                    ..
+                } = *solid
+                else {
+                    continue;
+                };
+                let (sn, cs) = yaw_rad.sin_cos();
+                let feet: Vec<Point2<f64>> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                    .iter()
+                    .map(|(fx, fy)| {
+                        let (x, y) = (fx * half[0], fy * half[1]);
+                        Point2::new(center[0] + cs * x - sn * y, center[1] + sn * x + cs * y)
+                    })
+                    .collect();
+                for f in &feet {
+                    assert!(inside(&room.corners, f), "seed {seed}: {piece:?}");
+                }
+                for c in &room.corners {
+                    assert!(!inside(&feet, c), "seed {seed}: {piece:?} round {c:?}");
+                }
+            }
         }
         assert!(w.people.len() <= 3);
         people += w.people.len();

@@ -98,11 +98,8 @@ fn assert_truth_accounts(r: &MissionReport, rooms: &[&str]) {
     }
     let surfaces: f64 = truth.surfaces.iter().map(|s| s.tally.plasterable_m2).sum();
     assert!((surfaces - truth.walls.plasterable_m2 - truth.ceilings.plasterable_m2).abs() < 1e-6);
-    assert_eq!(r.true_wall_coverage_pct, Some(truth.walls.coverage_pct()));
-    assert_eq!(
-        r.true_ceiling_coverage_pct,
-        Some(truth.ceilings.coverage_pct())
-    );
+    assert_eq!(r.true_wall_coverage_pct, truth.walls.coverage_pct());
+    assert_eq!(r.true_ceiling_coverage_pct, truth.ceilings.coverage_pct());
     let blocked = truth.walls.blocked_m2 + truth.ceilings.blocked_m2;
     assert!((r.blocked_m2.unwrap() - blocked).abs() < 1e-9);
     let unreached = truth.walls.unreached_m2 + truth.ceilings.unreached_m2;
@@ -110,8 +107,8 @@ fn assert_truth_accounts(r: &MissionReport, rooms: &[&str]) {
     eprintln!(
         "{rooms:?} on the truth: walls {:.2}%, ceiling {:.2}% of the reachable; \
          {unreached:.2} m² unreached, {blocked:.2} m² blocked; of {:.1} m² plasterable",
-        truth.walls.coverage_pct(),
-        truth.ceilings.coverage_pct(),
+        truth.walls.coverage_pct().unwrap_or(f64::NAN),
+        truth.ceilings.coverage_pct().unwrap_or(f64::NAN),
         truth.walls.plasterable_m2 + truth.ceilings.plasterable_m2
     );
 }

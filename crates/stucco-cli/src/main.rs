@@ -1002,11 +1002,11 @@ fn print_run(r: &MissionReport) {
     }
     if let Some(t) = r.plaster.as_ref().and_then(|p| p.truth.as_ref()) {
         println!(
-            "  on every true surface of {}: walls {:.2}%, ceiling {:.2}% of what the tool can reach \
+            "  on every true surface of {}: walls {}%, ceiling {}% of what the tool can reach \
              within the coat's tolerance; {:.2} m² left unreached, {:.2} m² blocked",
             t.rooms.join(", "),
-            t.walls.coverage_pct(),
-            t.ceilings.coverage_pct(),
+            pct_or_dash(t.walls.coverage_pct()),
+            pct_or_dash(t.ceilings.coverage_pct()),
             t.walls.unreached_m2 + t.ceilings.unreached_m2,
             t.walls.blocked_m2 + t.ceilings.blocked_m2,
         );
@@ -1041,6 +1041,11 @@ fn print_run(r: &MissionReport) {
             );
         }
     }
+}
+
+/// A percentage to two places, or a dash when there is none.
+fn pct_or_dash(x: Option<f64>) -> String {
+    x.map_or("—".to_owned(), |v| format!("{v:.2}"))
 }
 
 fn status_name(s: &stucco_mission::TaskStatus) -> String {

@@ -221,6 +221,11 @@ impl TruthReport {
                     SurfaceKind::Ceiling => "ceiling".to_owned(),
                 };
                 let advice = match (b.what, b.at) {
+                    (Some(stucco_sim::SHUT_DOOR), Some([x, y])) => format!(
+                        "open the shut door at ({x:.2}, {y:.2}) to reach {:.1} m² of the {} \
+                         {surface}",
+                        b.area_m2, b.room
+                    ),
                     (Some(what), Some([x, y])) => format!(
                         "move the {what} at ({x:.2}, {y:.2}) to reach {:.1} m² of the {} {surface}",
                         b.area_m2, b.room

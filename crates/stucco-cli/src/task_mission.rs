@@ -133,6 +133,11 @@ fn rooms_left(
     let Some(plan) = mission.floor_plan() else {
         return Vec::new();
     };
+    let start = mission
+        .start
+        .as_ref()
+        .and_then(|s| s.room.as_deref())
+        .and_then(|name| plan.room(name));
     plan.rooms()
         .iter()
         .enumerate()
@@ -140,7 +145,9 @@ fn rooms_left(
         .map(|(i, r)| crate::plastering::RoomLeft {
             room: r.name.clone(),
             floor_m2: r.size_m[0] * r.size_m[1],
-            why: if plan.doors_of(i).next().is_none() {
+            why: if start.map_or(plan.doors_of(i).next().is_none(), |s| {
+                plan.route(s, i).is_none()
+            }) {
                 "no open door leads there".to_owned()
             } else if mission.plaster_rooms().contains(&r.name) {
                 "the job ended before it".to_owned()
@@ -240,7 +247,8 @@ pub struct MissionReport {
     /// Every true plasterable wall area of the rooms the job names
     /// (openings and the bands left to the hand excepted) within the
     /// coat's tolerance, as a share of what is not blocked, % (plastering
-    /// missions). What the robot did not plan counts as unreached.
+    /// missions; none when nothing could be reached). What the robot did
+    /// not plan counts as unreached.
     pub true_wall_coverage_pct: Option<f64>,
     /// The same for the ceilings, %.
     pub true_ceiling_coverage_pct: Option<f64>,
@@ -1086,8 +1094,8 @@ impl<'a, P: Simulated> SimJob<'a, P> {
             path_length_m: trace.length,
             safety_stops,
             events: events_written,
-            true_wall_coverage_pct: truth.as_ref().map(|t| t.walls.coverage_pct()),
-            true_ceiling_coverage_pct: truth.as_ref().map(|t| t.ceilings.coverage_pct()),
+            true_wall_coverage_pct: truth.as_ref().and_then(|t| t.walls.coverage_pct()),
+            true_ceiling_coverage_pct: truth.as_ref().and_then(|t| t.ceilings.coverage_pct()),
             blocked_m2: truth
                 .as_ref()
                 .map(|t| t.walls.blocked_m2 + t.ceilings.blocked_m2),

@@ -928,9 +928,18 @@ room = "office"
     fn rooms_drawn_by_their_corners_are_the_rectangles_they_span() {
         let m = Mission::parse(DRAWN, Path::new("drawn.toml")).expect("a mission");
         let plan = m.floor_plan().expect("a plan");
+        // Each side the mean of its two corners.
         let office = &plan.rooms()[1];
-        assert_eq!(office.origin_m, [0.0, 1.65]);
-        assert!((office.size_m[0] - 4.0).abs() < 1e-12 && (office.size_m[1] - 3.35).abs() < 1e-12);
+        let near =
+            |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12;
+        assert!(near(office.origin_m, [0.005, 1.655]), "{office:?}");
+        assert!(near(office.size_m, [3.985, 3.34]), "{office:?}");
+        // Off by 3 cm each way at every corner, still the rectangle.
+        let rough = DRAWN.replace(
+            "[[0.01, 1.65], [4.0, 1.66], [3.98, 5.0], [0.0, 4.99]]",
+            "[[0.03, 1.62], [3.97, 1.68], [4.03, 4.97], [-0.03, 5.03]]",
+        );
+        assert!(Mission::parse(&rough, Path::new("drawn.toml")).is_ok());
         assert_eq!(plan.doors_of(1).count(), 1);
         assert_eq!(plan.windows().len(), 1);
         // Written back and read again, it is the same plan.
@@ -966,6 +975,12 @@ room = "office"
             "{e}"
         );
         assert!(e.contains("corners") && e.contains("6 corners"), "{e}");
+        // Three corners of a square and a fourth near the first: not one.
+        let folded = DRAWN.replace(
+            "[[0.01, 1.65], [4.0, 1.66], [3.98, 5.0], [0.0, 4.99]]",
+            "[[0.0, 1.65], [4.0, 1.65], [4.0, 5.0], [0.01, 1.66]]",
+        );
+        assert!(fault(&folded).contains("corners"), "{}", fault(&folded));
         // Clockwise.
         let cw = DRAWN.replace(
             "[[0.0, 0.0], [6.0, 0.0], [6.0, 1.5], [0.0, 1.5]]",

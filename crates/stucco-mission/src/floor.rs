@@ -49,8 +49,9 @@ pub struct PlanWindow {
     pub head_m: f64,
 }
 
-/// Farthest a drawn corner of a rectangle may lie from the rectangle its
-/// corners span, m (the drawing's slack).
+/// Farthest a drawn corner of a rectangle may lie from the rectangle
+/// fitted to its corners (each side the mean of its two), m: a drawing off
+/// by up to 3 cm in each coordinate of each corner.
 const CORNER_SLACK_M: f64 = 0.05;
 
 /// The rectangle `corners` draw, as `(origin, size)`, or why they are not
@@ -69,30 +70,38 @@ fn rectangle_of(corners: &[[f64; 2]]) -> Result<([f64; 2], [f64; 2]), String> {
     if twice_area <= 0.0 {
         return Err("the corners must run counter-clockwise and enclose an area".into());
     }
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for c in corners {
-        lo = [lo[0].min(c[0]), lo[1].min(c[1])];
-        hi = [hi[0].max(c[0]), hi[1].max(c[1])];
-    }
-    let boxed = [
-        [lo[0], lo[1]],
-        [hi[0], lo[1]],
-        [hi[0], hi[1]],
-        [lo[0], hi[1]],
-    ];
-    let on_box = n == 4
-        && corners.iter().all(|c| {
-            boxed
-                .iter()
-                .any(|b| (c[0] - b[0]).hypot(c[1] - b[1]) <= CORNER_SLACK_M)
-        });
-    if !on_box {
-        return Err(format!(
+    let not_a_rectangle = || {
+        format!(
             "a room of {n} corners that is not a rectangle along the drawing's axes: the \
              robot's room filter and planner keep such rectangles only, for now"
-        ));
+        )
+    };
+    if n != 4 {
+        return Err(not_a_rectangle());
     }
-    Ok((lo, [hi[0] - lo[0], hi[1] - lo[1]]))
+    // The corner nearest the south-west first; counter-clockwise, the
+    // others are then south-east, north-east, north-west. Each side is
+    // the mean of its two corners (a drawing is off corner by corner).
+    let first = (0..4)
+        .min_by(|&a, &b| {
+            let key = |c: [f64; 2]| c[0] + c[1];
+            key(corners[a]).total_cmp(&key(corners[b]))
+        })
+        .unwrap_or(0);
+    let [sw, se, ne, nw] = std::array::from_fn(|k| corners[(first + k) % 4]);
+    let (x0, x1) = ((sw[0] + nw[0]) / 2.0, (se[0] + ne[0]) / 2.0);
+    let (y0, y1) = ((sw[1] + se[1]) / 2.0, (nw[1] + ne[1]) / 2.0);
+    let fitted = [[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
+    let on_box = x1 > x0
+        && y1 > y0
+        && [sw, se, ne, nw]
+            .iter()
+            .zip(&fitted)
+            .all(|(c, f)| (c[0] - f[0]).hypot(c[1] - f[1]) <= CORNER_SLACK_M);
+    if !on_box {
+        return Err(not_a_rectangle());
+    }
+    Ok(([x0, y0], [x1 - x0, y1 - y0]))
 }
 
 /// A door of the plan between two rooms.

@@ -442,6 +442,7 @@ impl Executive {
                 // it); the task fails only when the touches go on.
                 let since = self.touch.map_or(now, |(since, _)| since);
                 self.touch = Some((since, now));
+                self.note_hazard(now, Some(Hazard::Touch));
                 if now.seconds_since(since) > self.config.safety.touch_timeout_s {
                     self.touch = None;
                     self.fail(now, TaskFailure::Bumper);
@@ -469,9 +470,14 @@ impl Executive {
             self.note_hazard(now, verdict.hazard);
             drive = verdict.drive;
         } else if self.mode == MissionMode::Running {
-            let (cmd, unit_done) = self.run(now, inputs.estimate);
-            checkpoint_due |= unit_done | std::mem::take(&mut self.effects.checkpoint);
-            drive = self.supervise(now, cmd, inputs, dt, &mut checkpoint_due);
+            // Touched: the task stands where it is (no stroke goes on, no
+            // new aim for the nozzle) until the bumper has been free a
+            // while.
+            if !self.touch_holds(now, dt) {
+                let (cmd, unit_done) = self.run(now, inputs.estimate);
+                checkpoint_due |= unit_done | std::mem::take(&mut self.effects.checkpoint);
+                drive = self.supervise(now, cmd, inputs, dt, &mut checkpoint_due);
+            }
         } else {
             // Standing (done, paused, waiting for an e-stop's release):
             // what the supervisor holds the robot for is still told as it
@@ -511,6 +517,20 @@ impl Executive {
             enter_room: self.effects.enter_room.take(),
             tool_look,
         }
+    }
+
+    /// True while a touch holds the robot: until the bumper has been free
+    /// for the field's clearing time.
+    fn touch_holds(&mut self, now: Stamp, dt: f64) -> bool {
+        let Some((_, last)) = self.touch else {
+            return false;
+        };
+        if now.seconds_since(last) < self.config.safety.clear_s.max(dt) {
+            self.note_hazard(now, Some(Hazard::Touch));
+            return true;
+        }
+        self.touch = None;
+        false
     }
 
     fn pause(&mut self, now: Stamp, reason: String) {
@@ -607,15 +627,6 @@ impl Executive {
             self.supervisor
                 .check(cmd, inputs.obstacles, inputs.unseen, inputs.estimate, dt);
         let safety = self.config.safety.clone();
-        // A touch holds the robot until the bumper has been free for the
-        // field's clearing time; its timers stand meanwhile.
-        if let Some((_, last)) = self.touch {
-            if now.seconds_since(last) < safety.clear_s.max(dt) {
-                self.note_hazard(now, Some(Hazard::Touch));
-                return DriveCommand::STOP;
-            }
-            self.touch = None;
-        }
         self.note_hazard(now, verdict.hazard);
         match verdict.hazard {
             Some(Hazard::Lost) => {

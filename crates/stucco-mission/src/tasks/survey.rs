@@ -470,11 +470,18 @@ fn survey_loop(
         return Ok(p.to_vec());
     }
     let [xs, ys] = room_m;
-    let narrow = 0.5 * (xs.min(ys) - NARROW_LOOP_M);
-    let inset_m = inset_m.min(narrow);
-    if inset_m < LOOP_WALL_MIN_M || 2.0 * inset_m >= xs.max(ys) {
-        return Err(TaskFailure::NoLoop { inset_m, room_m });
-    }
+    // The inset asked for where the room leaves a loop that far in;
+    // squeezed into a narrower room, no nearer the walls than the body
+    // passes.
+    let inset_m = if 2.0 * inset_m < xs.min(ys) {
+        inset_m
+    } else {
+        let narrow = 0.5 * (xs.min(ys) - NARROW_LOOP_M);
+        if narrow < LOOP_WALL_MIN_M || 2.0 * narrow >= xs.max(ys) {
+            return Err(TaskFailure::NoLoop { inset_m, room_m });
+        }
+        narrow
+    };
     Ok(vec![
         [inset_m, inset_m],
         [xs - inset_m, inset_m],
@@ -535,6 +542,9 @@ mod tests {
             survey_loop(None, 1.0, [5.0, 1.0]),
             Err(TaskFailure::NoLoop { .. })
         ));
+        // A small inset asked for in a room that leaves it is kept.
+        let near = survey_loop(None, 0.3, [5.0, 4.0]).unwrap_or_default();
+        assert_eq!(near[0], [0.3, 0.3]);
         // A loop given is driven as given.
         let given = [[0.5, 0.5], [1.0, 0.5]];
         assert_eq!(
