@@ -81,7 +81,8 @@ impl Upright {
     }
 }
 
-/// A person walking a closed path.
+/// A person walking a closed path, who waits rather than walk into the
+/// robot.
 #[derive(Clone, Debug)]
 pub struct Walker {
     path: Vec<[f64; 2]>,
@@ -89,12 +90,27 @@ pub struct Walker {
     /// Where along the loop the person was at time zero, m.
     phase_m: f64,
     loop_m: f64,
+    /// How far the person has walked, m (back along the path counts
+    /// against).
+    walked_m: f64,
+    /// The time of the last step, s.
+    t_s: f64,
+    /// Walking along the path (1) or back along it (-1).
+    way: f64,
+    /// How long they have been waiting for the robot, s.
+    waited_s: f64,
 }
 
+/// A person walking toward the robot stops this far from its body (the
+/// middle of their stride from the body's outline), m.
+const YIELD_M: f64 = 0.45;
+/// After waiting this long for the robot, a person turns back, s.
+const TURN_BACK_S: f64 = 4.0;
+
 impl Walker {
-    /// The person's legs and torso at `t_s`.
-    pub fn body_at(&self, t_s: f64) -> [Upright; 3] {
-        let p = self.pose_at(t_s);
+    /// The person's legs and torso where they are now.
+    pub fn body(&self) -> [Upright; 3] {
+        let p = self.pose();
         let leg = |side: f64| Upright {
             at: p.transform_point(&Point2::new(0.0, side * LEG_HALF_SPACING_M)),
             radius: LEG_RADIUS_M,
@@ -111,9 +127,51 @@ impl Walker {
         ]
     }
 
-    /// Position and heading at `t_s`.
-    pub fn pose_at(&self, t_s: f64) -> Pose2 {
-        let mut s = (self.phase_m + self.speed_mps * t_s).rem_euclid(self.loop_m.max(1e-9));
+    /// Position and heading now.
+    pub fn pose(&self) -> Pose2 {
+        let p = self.pose_along(self.walked_m);
+        if self.way < 0.0 {
+            Pose2::new(p.x, p.y, p.theta + std::f64::consts::PI)
+        } else {
+            p
+        }
+    }
+
+    /// Walks on to `t_s`, unless that would bring them within `YIELD_M`
+    /// of the robot's body (`robot`: its outline's centre, half extents
+    /// and heading), nearer than they are: then they wait.
+    fn walk_to(&mut self, t_s: f64, robot: Option<(Point2<f64>, [f64; 2], f64)>) {
+        let dt = (t_s - self.t_s).max(0.0);
+        let next = self.walked_m + self.way * self.speed_mps * dt;
+        self.t_s = t_s;
+        if let Some((centre, half, heading)) = robot {
+            let frame = Pose2::new(centre.x, centre.y, heading).inverse();
+            let gap = |p: &Pose2| {
+                let q = frame.transform_point(&p.position());
+                let (dx, dy) = (
+                    (q.x.abs() - half[0]).max(0.0),
+                    (q.y.abs() - half[1]).max(0.0),
+                );
+                dx.hypot(dy)
+            };
+            let (now, then) = (gap(&self.pose()), gap(&self.pose_along(next)));
+            if then < YIELD_M && then < now {
+                self.waited_s += dt;
+                if self.waited_s > TURN_BACK_S {
+                    self.way = -self.way;
+                    self.waited_s = 0.0;
+                }
+                return;
+            }
+        }
+        self.waited_s = 0.0;
+        self.walked_m = next;
+    }
+
+    /// Position and heading `walked_m` along the path from where they
+    /// started.
+    fn pose_along(&self, walked_m: f64) -> Pose2 {
+        let mut s = (self.phase_m + walked_m).rem_euclid(self.loop_m.max(1e-9));
         let n = self.path.len();
         for i in 0..n {
             let (a, b) = (self.path[i], self.path[(i + 1) % n]);
@@ -205,6 +263,10 @@ impl Scene {
                     speed_mps: p.speed_mps,
                     phase_m: rng.random::<f64>() * loop_m,
                     loop_m,
+                    walked_m: 0.0,
+                    t_s: 0.0,
+                    way: 1.0,
+                    waited_s: 0.0,
                 }
             })
             .collect();
@@ -229,15 +291,31 @@ impl Scene {
             walkers,
             bodies: Vec::new(),
         };
-        scene.step_to(0.0);
+        scene.step_to(0.0, None);
         scene
     }
 
-    /// Moves the people to where they are at `t_s`.
-    pub fn step_to(&mut self, t_s: f64) {
+    /// Moves the people on to `t_s`, each waiting rather than walk into
+    /// the robot standing at `robot` (true pose).
+    pub fn step_to(&mut self, t_s: f64, robot: Option<&Pose2>) {
+        let outline = robot.map(|r| {
+            let c = r.transform_point(&Point2::new(
+                self.robot_shape_offset[0],
+                self.robot_shape_offset[1],
+            ));
+            (
+                c,
+                [
+                    f64::from(self.robot_shape.half_extents.x),
+                    f64::from(self.robot_shape.half_extents.y),
+                ],
+                r.theta,
+            )
+        });
         self.bodies.clear();
-        for w in &self.walkers {
-            self.bodies.extend(w.body_at(t_s));
+        for w in &mut self.walkers {
+            w.walk_to(t_s, outline);
+            self.bodies.extend(w.body());
         }
     }
 
@@ -290,9 +368,9 @@ impl Scene {
         })
     }
 
-    /// People's poses at `t_s`, for ground truth.
-    pub fn people_at(&self, t_s: f64) -> Vec<Pose2> {
-        self.walkers.iter().map(|w| w.pose_at(t_s)).collect()
+    /// People's poses now, for ground truth.
+    pub fn people(&self) -> Vec<Pose2> {
+        self.walkers.iter().map(Walker::pose).collect()
     }
 }
 

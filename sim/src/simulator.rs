@@ -195,7 +195,7 @@ impl Simulator {
             stamp: Stamp::from_nanos(self.now_ns),
             drive: self.drive.state().clone(),
             bumper: self.bumper,
-            people: self.scene.people_at(self.now_ns as f64 * 1e-9),
+            people: self.scene.people(),
         }
     }
 
@@ -245,8 +245,9 @@ impl Simulator {
         let dt = self.step_ns as f64 * 1e-9;
         let (t0, t1) = (self.now_ns, self.now_ns + self.step_ns);
         let before = self.drive.state().pose;
-        // The people where they are at the step's end.
-        self.scene.step_to(t1 as f64 * 1e-9);
+        // The people where they are at the step's end, none walking into
+        // the robot.
+        self.scene.step_to(t1 as f64 * 1e-9, Some(&before));
         let t = t0 as f64 * 1e-9;
         let faults = ActuatorFaults {
             stalled: self.faults.stalled_drive.is_some_and(|i| i.contains(t)),

@@ -1,0 +1,56 @@
+//! People in the simulator walk round the robot: a person whose way runs
+//! into a standing robot waits short of it, then turns back.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use stucco_core::{DriveCommand, Platform};
+use stucco_sim::{SimConfig, Simulator, WorldSpec};
+
+#[test]
+fn a_person_walking_at_the_standing_robot_waits_then_turns_back() {
+    let world = |seed: u64| {
+        let text = format!(
+            "name = \"p\"\nseed = {seed}\n[robot]\nat = [2.0, 1.5]\nheading_deg = 0.0\n\
+             [[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [8.0, 0.0], [8.0, 3.0], [0.0, 3.0]]\n\
+             [[person]]\npath = [[7.5, 1.5], [0.5, 1.5]]\nspeed_mps = 1.0\n"
+        );
+        WorldSpec::parse(&text, "p").unwrap()
+    };
+    // The first seed whose person starts east of the robot walking west,
+    // at it (each person starts somewhere along their path).
+    let mut sim = (1..100)
+        .map(|seed| Simulator::new(&world(seed), SimConfig::default(), None))
+        .find(|sim| {
+            let p = sim.truth().people[0];
+            p.x > 4.0 && p.theta.cos() < 0.0
+        })
+        .unwrap();
+    sim.command(DriveCommand::STOP);
+    let mut nearest = f64::INFINITY;
+    let mut xs = Vec::new();
+    for _ in 0..600 {
+        let r = sim.advance(0.05);
+        assert!(
+            !r.bumper,
+            "the person walked into the robot at {:?}",
+            sim.truth().people[0]
+        );
+        let p = sim.truth().people[0];
+        // The robot's body spans x 1.85–2.75, y 1.19–1.81.
+        let dx = (1.85 - p.x).max(p.x - 2.75).max(0.0);
+        let dy = (1.19 - p.y).max(p.y - 1.81).max(0.0);
+        nearest = nearest.min(dx.hypot(dy));
+        xs.push(p.x);
+    }
+    assert!(nearest > 0.3, "came within {nearest} m");
+    // It stood a while short of the robot, then walked away from it.
+    let waited = xs.windows(2).filter(|w| (w[1] - w[0]).abs() < 1e-9).count();
+    assert!(
+        waited as f64 * 0.05 >= 4.0,
+        "waited {} s",
+        waited as f64 * 0.05
+    );
+    assert!(
+        xs.windows(2).any(|w| w[1] - w[0] > 0.01),
+        "never turned back"
+    );
+}
