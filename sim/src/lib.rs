@@ -54,7 +54,10 @@ pub use space::SpaceCaster;
 pub use stucco_core::{CameraSpec, TOOL_CAMERA};
 pub use tour::TourDriver;
 pub use trace::TraceHash;
-pub use truth::{Blocker, Finish, Reach, SHUT_DOOR, SurfaceTruth, Tally, TrueScore, score_truth};
+pub use truth::{
+    Blocker, Finish, Reach, SHUT_DOOR, SurfaceTruth, Tally, TrueScore, edge_distance, inside,
+    score_truth,
+};
 pub use vehicle::{DriveState, DynamicsConfig};
 pub use world::{
     BoxSpec, ColumnSpec, DoorSpec, PersonSpec, RadiatorSpec, RobotStart, RoomSpec, TableSpec,

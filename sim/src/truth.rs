@@ -163,6 +163,9 @@ pub fn score_truth(
     let world = World::new(layout, reach, start);
     let mut out = TrueScore::default();
     let mut blocked: Vec<Blocker> = Vec::new();
+    // Each room's shut door when the robot cannot get into it, worked out
+    // once a room.
+    let mut shut: Vec<(String, Option<Option<[f64; 2]>>)> = Vec::new();
     for coat in coats.iter().filter(|c| rooms.contains(&c.room)) {
         let Some(room) = layout.rooms.iter().find(|r| r.name == coat.room) else {
             continue;
@@ -174,16 +177,23 @@ pub fn score_truth(
         // A room the robot cannot get into at all (a shut door, a way too
         // narrow): every blocked cell is put to its shut door, if it has
         // one.
-        let shut_door = (!world.enterable(&room.corners)).then(|| {
-            layout
-                .openings
-                .iter()
-                .find(|o| o.room == coat.room && o.kind == OpeningKind::ClosedDoor)
-                .map(|o| {
-                    let m = nalgebra::center(&o.edges[0], &o.edges[1]);
-                    [m.x, m.y]
-                })
-        });
+        let shut_door = match shut.iter().find(|(r, _)| r == &coat.room) {
+            Some((_, d)) => *d,
+            None => {
+                let d = (!world.enterable(&room.corners)).then(|| {
+                    layout
+                        .openings
+                        .iter()
+                        .find(|o| o.room == coat.room && o.kind == OpeningKind::ClosedDoor)
+                        .map(|o| {
+                            let m = nalgebra::center(&o.edges[0], &o.edges[1]);
+                            [m.x, m.y]
+                        })
+                });
+                shut.push((coat.room.clone(), d));
+                d
+            }
+        };
         let area = coat.grid.cell_area_m2();
         let mut tally = Tally::default();
         for cell in &cells {
@@ -839,7 +849,7 @@ fn mark_reach(
 }
 
 /// True when `p` lies inside the polygon `corners` (even–odd rule).
-pub(crate) fn inside(corners: &[Point2<f64>], p: &Point2<f64>) -> bool {
+pub fn inside(corners: &[Point2<f64>], p: &Point2<f64>) -> bool {
     let n = corners.len();
     let mut inside = false;
     for i in 0..n {
@@ -855,7 +865,7 @@ pub(crate) fn inside(corners: &[Point2<f64>], p: &Point2<f64>) -> bool {
 }
 
 /// Distance from `p` to the nearest side of the polygon `corners`.
-pub(crate) fn edge_distance(corners: &[Point2<f64>], p: &Point2<f64>) -> f64 {
+pub fn edge_distance(corners: &[Point2<f64>], p: &Point2<f64>) -> f64 {
     let n = corners.len();
     (0..n)
         .map(|i| {

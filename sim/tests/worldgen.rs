@@ -4,23 +4,13 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use nalgebra::Point2;
-use stucco_sim::{CORRIDOR, Layout, WorldSpec, generate};
+use stucco_sim::{CORRIDOR, Layout, WorldSpec, edge_distance, generate, inside};
 
 const SEEDS: u64 = 300;
 
 fn near_wall(corners: &[[f64; 2]], p: [f64; 2], within: f64) -> bool {
-    let n = corners.len();
-    (0..n).any(|i| {
-        let (a, b) = (corners[i], corners[(i + 1) % n]);
-        let (a, b, p) = (
-            Point2::new(a[0], a[1]),
-            Point2::new(b[0], b[1]),
-            Point2::new(p[0], p[1]),
-        );
-        let ab = b - a;
-        let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
-        (p - (a + ab * t)).norm() <= within
-    })
+    let corners: Vec<Point2<f64>> = corners.iter().map(|c| Point2::new(c[0], c[1])).collect();
+    edge_distance(&corners, &Point2::new(p[0], p[1])) <= within
 }
 
 #[test]
@@ -142,18 +132,6 @@ fn every_building_is_a_world_within_its_ranges() {
     let want = ["L", "T", "angled", "chimney breast", "rectangle"];
     assert_eq!(kinds.into_iter().collect::<Vec<_>>(), want);
     assert!(shut > 0 && to_the_floor > 0 && people > 0 && columns > 0);
-}
-
-fn inside(corners: &[Point2<f64>], p: &Point2<f64>) -> bool {
-    let n = corners.len();
-    let mut inside = false;
-    for i in 0..n {
-        let (a, b) = (corners[i], corners[(i + 1) % n]);
-        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-            inside = !inside;
-        }
-    }
-    inside
 }
 
 #[test]

@@ -10,17 +10,14 @@
 use std::path::Path;
 use stucco_cli::{TaskMissionJob, run_task_mission};
 
-/// `runs` seeds of the task mission `missions/NAME`, each checked to be
-/// done with every move of the frame made, in order, into the rooms of
-/// `way`, each when the robot truly stood in it.
-fn rounds(name: &str, runs: u64, way: &[&str]) -> Vec<stucco_cli::MissionReport> {
-    let s = run_task_mission(
+/// The task mission at `mission`, `runs` seeds of it (the file's when
+/// none), with no folder.
+fn run_job(mission: &Path, runs: Option<u64>) -> stucco_cli::MissionSummary {
+    run_task_mission(
         &TaskMissionJob {
-            mission: Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../missions")
-                .join(name),
+            mission: mission.to_owned(),
             seed: None,
-            runs: Some(runs),
+            runs,
             out: None,
             resume: false,
             stop_after_s: None,
@@ -28,7 +25,19 @@ fn rounds(name: &str, runs: u64, way: &[&str]) -> Vec<stucco_cli::MissionReport>
         },
         &|_, _| {},
     )
-    .unwrap();
+    .unwrap()
+}
+
+/// `runs` seeds of the task mission `missions/NAME`, each checked to be
+/// done with every move of the frame made, in order, into the rooms of
+/// `way`, each when the robot truly stood in it.
+fn rounds(name: &str, runs: u64, way: &[&str]) -> Vec<stucco_cli::MissionReport> {
+    let s = run_job(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../missions")
+            .join(name),
+        Some(runs),
+    );
     assert_eq!(s.runs.len(), runs as usize);
     for r in &s.runs {
         let seed = r.seed;
@@ -145,19 +154,7 @@ width_m = 0.9
 task = "map_room"
 "#,
     );
-    let s = run_task_mission(
-        &TaskMissionJob {
-            mission: dir.path().join("mission.toml"),
-            seed: None,
-            runs: None,
-            out: None,
-            resume: false,
-            stop_after_s: None,
-            record: false,
-        },
-        &|_, _| {},
-    )
-    .unwrap();
+    let s = run_job(&dir.path().join("mission.toml"), None);
     let r = &s.runs[0];
     assert_eq!(r.outcome, "done", "{:?}", r.reason);
     // The drawing's door, and no other.

@@ -46,16 +46,25 @@ pub fn run_buildings(seeds: std::ops::Range<u64>, out: &Path) -> Result<Vec<Buil
         .collect()
 }
 
-fn run_building(seed: u64, dir: &Path) -> Result<BuildingRow> {
-    let b = stucco_sim::generate(seed);
+/// Writes `b`'s world, drawing and job into `dir` (made if missing):
+/// `world.toml`, `plan.toml`, `mission.toml`.
+pub fn write_building(b: &stucco_sim::Building, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot make {}", dir.display()))?;
     for (name, text) in [
         ("world.toml", b.world_toml()),
         ("plan.toml", b.plan_toml()),
         ("mission.toml", b.mission_toml()),
     ] {
-        write_atomic(&dir.join(name), text.as_bytes())?;
+        let path = dir.join(name);
+        write_atomic(&path, text.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
     }
+    Ok(())
+}
+
+fn run_building(seed: u64, dir: &Path) -> Result<BuildingRow> {
+    let b = stucco_sim::generate(seed);
+    write_building(&b, dir)?;
     let mut row = BuildingRow {
         seed,
         shapes: b.shapes.iter().map(|(_, k)| (*k).to_owned()).collect(),

@@ -40,7 +40,7 @@ mod study_plot;
 mod task_mission;
 mod walls;
 
-pub use buildings::{BuildingRow, buildings_table, run_buildings};
+pub use buildings::{BuildingRow, buildings_table, run_buildings, write_building};
 pub use carmen::*;
 pub use experiments::{ConditionReport, RunJob, RunReport, load_all, run_mission};
 pub use floor::{FloorRun, map_floor};

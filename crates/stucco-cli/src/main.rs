@@ -1112,18 +1112,8 @@ fn run_experiment(job: RunJob, json: bool) -> ExitCode {
 
 /// Writes the building of `seed` into `out`, and says what it is.
 fn worldgen(seed: u64, out: &std::path::Path) -> anyhow::Result<()> {
-    use anyhow::Context;
     let b = stucco_sim::generate(seed);
-    std::fs::create_dir_all(out).with_context(|| format!("cannot make {}", out.display()))?;
-    for (name, text) in [
-        ("world.toml", b.world_toml()),
-        ("plan.toml", b.plan_toml()),
-        ("mission.toml", b.mission_toml()),
-    ] {
-        let path = out.join(name);
-        stucco_runtime::write_atomic(&path, text.as_bytes())
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
+    stucco_cli::write_building(&b, out)?;
     let w = &b.world;
     // How much of it this robot could plaster at all: every surface bare,
     // scored on the truth.

@@ -1358,47 +1358,32 @@ pub(crate) fn mission_room(mission: &Mission, resume: Option<&RoomMap>) -> Resul
     }
 }
 
-/// The room of `layout` that `at` (world frame) stands in (none in a
-/// doorway's thickness).
-/// The rooms a job names for plastering, by their world names: each
-/// `plaster` task's room where the tasks before it tell it (the start
-/// room, then each `go_to_room`'s), and every room a plaster task planned
-/// in. A mission without a drawing plasters the room it starts in.
+/// The rooms a job names for plastering, by their world names: the
+/// drawing's rooms its `plaster` tasks plaster ([`Mission::plaster_rooms`]),
+/// and every room a plaster task planned in; a mission without a drawing
+/// plasters the room it starts in.
 fn job_rooms(
     mission: &Mission,
     layout: &Layout,
     start: &Pose2,
     planned: impl Iterator<Item = String>,
 ) -> Vec<String> {
-    let plaster = |t: &TaskSpec| matches!(t, TaskSpec::Plaster { .. });
-    let mut rooms: Vec<String> = Vec::new();
-    match mission.floor_plan() {
-        Some(plan) => {
-            let mut here = mission
-                .start
-                .as_ref()
-                .and_then(|s| s.room.clone())
-                .filter(|name| plan.room(name).is_some());
-            for task in &mission.tasks {
-                match task {
-                    TaskSpec::GoToRoom { room, .. } => here = Some(room.clone()),
-                    TaskSpec::PassDoor { .. } => here = None,
-                    t if plaster(t) => rooms.extend(here.clone()),
-                    _ => {}
-                }
-            }
-        }
-        None if mission.tasks.iter().any(plaster) => rooms.extend(true_room(layout, start)),
-        None => {}
+    let plasters = mission
+        .tasks
+        .iter()
+        .any(|t| matches!(t, TaskSpec::Plaster { .. }));
+    let mut rooms: Vec<String> = mission.plaster_rooms().to_vec();
+    if mission.floor_plan().is_none() && plasters {
+        rooms.extend(true_room(layout, start));
     }
     rooms.extend(planned);
-    // What `rooms = …` named, a way there or not.
-    rooms.extend(mission.plaster_rooms().iter().cloned());
     let mut seen = std::collections::BTreeSet::new();
     rooms.retain(|r| seen.insert(r.clone()));
     rooms
 }
 
+/// The room of `layout` that `at` (world frame) stands in (none in a
+/// doorway's thickness).
 fn true_room(layout: &Layout, at: &Pose2) -> Option<String> {
     RoomFrame::of(layout, at).ok().map(|f| f.name)
 }

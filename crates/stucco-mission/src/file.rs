@@ -79,7 +79,7 @@ pub struct Mission {
     /// The plan of `rooms` and `doors`, checked once at load.
     #[serde(skip)]
     floor: Option<FloorPlan>,
-    /// The rooms `plaster` tasks name by their `rooms`.
+    /// The drawing's rooms the `plaster` tasks plaster ([`Mission::plaster_rooms`]).
     #[serde(skip)]
     named_rooms: Vec<String>,
     /// The mission file's text as it was parsed.
@@ -444,110 +444,102 @@ impl Mission {
             .as_ref()
             .zip(self.start.as_ref().and_then(|s| s.room.as_ref()))
             .and_then(|(p, name)| p.room(name));
+        let mut named: Vec<String> = Vec::new();
+        let mut name = |room: usize, plan: &FloorPlan| {
+            let n = &plan.rooms()[room].name;
+            if !named.contains(n) {
+                named.push(n.clone());
+            }
+        };
         let mut tasks = Vec::with_capacity(self.tasks.len());
         for (i, task) in std::mem::take(&mut self.tasks).into_iter().enumerate() {
-            match task {
+            let (
                 TaskSpec::Plaster {
-                    rooms: Some(rooms),
-                    walls,
-                    ceiling,
-                    speed_mps,
-                    settle_s,
-                    survey,
-                    survey_speed_mps,
-                    region,
-                    spray,
-                } => {
-                    let line = line_of_array(text, "task", i, "rooms");
-                    let Some(plan) = &plan else {
-                        bad!(
-                            "{}:{line}: task {} (plaster): rooms: names rooms of the building's \
-                             drawing, and the mission has none ([[room]], or plan = FILE)",
-                            path.display(),
-                            i + 1
-                        );
-                    };
-                    let named: Vec<usize> = match &rooms {
-                        crate::Rooms::All(_) => (0..plan.rooms().len()).collect(),
-                        crate::Rooms::Named(names) => {
-                            let mut out = Vec::new();
-                            for name in names {
-                                let Some(k) = plan.room(name) else {
-                                    bad!(
-                                        "{}:{line}: task {} (plaster): rooms: no room {name:?} on \
-                                         the floor plan",
-                                        path.display(),
-                                        i + 1
-                                    );
-                                };
-                                if !out.contains(&k) {
-                                    out.push(k);
-                                }
-                            }
-                            out
-                        }
-                    };
-                    for &k in &named {
-                        let name = &plan.rooms()[k].name;
-                        if !self.named_rooms.contains(name) {
-                            self.named_rooms.push(name.clone());
+                    rooms: Some(rooms), ..
+                },
+                Some(plan),
+            ) = (&task, &plan)
+            else {
+                if let TaskSpec::Plaster { rooms: Some(_), .. } = task {
+                    bad!(
+                        "{}:{}: task {} (plaster): rooms: names rooms of the building's drawing, \
+                         and the mission has none ([[room]], or plan = FILE)",
+                        path.display(),
+                        line_of_array(text, "task", i, "rooms"),
+                        i + 1
+                    );
+                }
+                match &task {
+                    TaskSpec::GoToRoom { room, .. } => {
+                        here = plan.as_ref().and_then(|p| p.room(room));
+                    }
+                    TaskSpec::PassDoor { .. } => here = None,
+                    TaskSpec::Plaster { .. } => {
+                        if let (Some(h), Some(p)) = (here, &plan) {
+                            name(h, p);
                         }
                     }
-                    let mut left = named;
-                    loop {
-                        // The nearest room left, by doors passed; the room
-                        // the robot is in first.
-                        let next = left
-                            .iter()
-                            .enumerate()
-                            .filter_map(|(j, &k)| {
-                                let doors = match here {
-                                    Some(h) => plan.route(h, k)?.len(),
-                                    None => usize::MAX - 1,
-                                };
-                                Some((doors, j))
-                            })
-                            .min();
-                        let Some((_, j)) = next else {
-                            break;
+                    _ => {}
+                }
+                tasks.push(task);
+                continue;
+            };
+            let mut left: Vec<usize> = match rooms {
+                crate::Rooms::All(_) => (0..plan.rooms().len()).collect(),
+                crate::Rooms::Named(names) => {
+                    let mut out = Vec::new();
+                    for n in names {
+                        let Some(k) = plan.room(n) else {
+                            bad!(
+                                "{}:{}: task {} (plaster): rooms: no room {n:?} on the floor plan",
+                                path.display(),
+                                line_of_array(text, "task", i, "rooms"),
+                                i + 1
+                            );
                         };
-                        let room = left.remove(j);
-                        if here != Some(room) {
-                            tasks.push(TaskSpec::go_to_room(&plan.rooms()[room].name));
+                        if !out.contains(&k) {
+                            out.push(k);
                         }
-                        tasks.push(TaskSpec::map_room());
-                        tasks.push(TaskSpec::Plaster {
-                            walls: walls.clone(),
-                            ceiling,
-                            speed_mps,
-                            settle_s,
-                            survey,
-                            survey_speed_mps,
-                            region,
-                            spray: spray.clone(),
-                            rooms: None,
-                        });
-                        here = Some(room);
                     }
+                    out
                 }
-                task => {
-                    match &task {
-                        TaskSpec::GoToRoom { room, .. } => {
-                            here = plan.as_ref().and_then(|p| p.room(room));
-                        }
-                        TaskSpec::PassDoor { .. } => here = None,
-                        _ => {}
-                    }
-                    tasks.push(task);
+            };
+            for &k in &left {
+                name(k, plan);
+            }
+            // The same task, a room at a time.
+            let mut each = task.clone();
+            if let TaskSpec::Plaster { rooms, .. } = &mut each {
+                *rooms = None;
+            }
+            // The nearest room left, by doors passed (the room the robot is
+            // in first); those no way leads to are left named.
+            while let Some((_, j)) = left
+                .iter()
+                .enumerate()
+                .filter_map(|(j, &k)| match here {
+                    Some(h) => Some((plan.route(h, k)?.len(), j)),
+                    None => Some((usize::MAX, j)),
+                })
+                .min()
+            {
+                let room = left.remove(j);
+                if here != Some(room) {
+                    tasks.push(TaskSpec::go_to_room(&plan.rooms()[room].name));
                 }
+                tasks.push(TaskSpec::map_room());
+                tasks.push(each.clone());
+                here = Some(room);
             }
         }
+        self.named_rooms = named;
         self.tasks = tasks;
         Ok(())
     }
 
-    /// The rooms the mission's `plaster` tasks name by their `rooms` (the
-    /// drawing's names), whether a way leads there or not.
+    /// The drawing's rooms the mission's `plaster` tasks plaster: each
+    /// task's room where the tasks before it tell it, and every room a
+    /// task's `rooms` names, whether a way leads there or not.
     pub fn plaster_rooms(&self) -> &[String] {
         &self.named_rooms
     }
@@ -1077,6 +1069,15 @@ room = "office"
             .to_string();
         assert!(e.starts_with(&format!("drawn.toml:{line}:")), "{e}");
         assert!(e.contains("attic"), "{e}");
+        // Neither "all" nor a list: named with its line.
+        let e = Mission::parse(&plaster_rooms("\"every\""), Path::new("drawn.toml"))
+            .expect_err("not a word it knows")
+            .to_string();
+        assert!(
+            e.contains("rooms: \"all\" or a list") && e.contains("every"),
+            "{e}"
+        );
+        assert!(e.starts_with("drawn.toml:"), "{e}");
         // Rooms without a drawing.
         let e = Mission::parse(
             "name = \"x\"\n[start]\nroom_m = [4.0, 3.0]\n[spray]\n[[task]]\ntask = \"plaster\"\nrooms = \"all\"\n",

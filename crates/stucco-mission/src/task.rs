@@ -269,7 +269,7 @@ pub enum TaskSpec {
 
 /// The rooms a `plaster` task names: every room of the drawing, or these.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, try_from = "RoomsText")]
 pub enum Rooms {
     /// `"all"`: every room of the drawing.
     All(AllRooms),
@@ -284,6 +284,27 @@ pub enum Rooms {
 pub enum AllRooms {
     /// Every room.
     All,
+}
+
+/// `rooms` as a mission file writes it: a word or a list.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RoomsText {
+    Word(String),
+    Names(Vec<String>),
+}
+
+impl TryFrom<RoomsText> for Rooms {
+    type Error = String;
+    fn try_from(t: RoomsText) -> Result<Self, String> {
+        match t {
+            RoomsText::Word(w) if w == "all" => Ok(Rooms::All(AllRooms::All)),
+            RoomsText::Word(w) => Err(format!(
+                "rooms: \"all\" or a list of the drawing's room names, not {w:?}"
+            )),
+            RoomsText::Names(n) => Ok(Rooms::Named(n)),
+        }
+    }
 }
 
 impl TaskSpec {

@@ -2010,25 +2010,12 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
     // onto with the front in a doorway; the end walls' stand across the
     // hall, which no way turns the robot to. The laser sees the walls, so
     // the supervisor stops a way into one; the station is then given up.
-    let plan = apartment();
-    let mut robot = Robot::at(Pose2::new(3.4, 0.6, 0.0));
-    robot.in_room(&plan, 2);
-    let mut cfg = config(true);
-    cfg.spray = Some(stucco_plan::SprayTool::default());
-    cfg.floor = Some(plan.clone());
-    cfg.safety.obstacle_margin_m = 0.03;
-    cfg.safety.lateral_margin_m = 0.02;
-    let mut exec = Executive::new(cfg, vec![plaster(false)]);
+    let (plan, mut robot, mut exec) = in_the_hall(plaster(false));
     let walls = hall_walls();
     let (mut first_plan, mut last_plan, mut given_up, mut passes) = (None, None, Vec::new(), 0);
     let mut closest = f64::INFINITY;
     for _ in 0..(4000.0 / DT) as usize {
-        let to_robot = robot.pose.inverse();
-        let seen: Vec<Point2<f64>> = walls
-            .iter()
-            .map(|p| to_robot.transform_point(p))
-            .filter(|p| p.coords.norm() < 3.0)
-            .collect();
+        let seen = within_3_m(&robot, &walls);
         let out = ask_seeing(&mut exec, &robot, &seen);
         if first_plan.is_none() {
             first_plan = exec.plaster_plan().cloned();
@@ -2117,6 +2104,32 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
     assert!(closest >= 0.01, "{closest}");
 }
 
+/// A robot in the apartment's hall (its room 2), the executive of an
+/// unattended mission of `task` with the tight field the apartment's
+/// missions set.
+fn in_the_hall(task: TaskSpec) -> (FloorPlan, Robot, Executive) {
+    let plan = apartment();
+    let mut robot = Robot::at(Pose2::new(3.4, 0.6, 0.0));
+    robot.in_room(&plan, 2);
+    let mut cfg = config(true);
+    cfg.spray = Some(stucco_plan::SprayTool::default());
+    cfg.floor = Some(plan.clone());
+    cfg.safety.obstacle_margin_m = 0.03;
+    cfg.safety.lateral_margin_m = 0.02;
+    (plan, robot, Executive::new(cfg, vec![task]))
+}
+
+/// The points of `walls` (room frame) within 3 m of `robot`, in its frame:
+/// what its laser sees of them.
+fn within_3_m(robot: &Robot, walls: &[Point2<f64>]) -> Vec<Point2<f64>> {
+    let to_robot = robot.pose.inverse();
+    walls
+        .iter()
+        .map(|p| to_robot.transform_point(p))
+        .filter(|p| p.coords.norm() < 3.0)
+        .collect()
+}
+
 /// The apartment's hall's walls as the laser sees them (hall frame), every
 /// 2 cm, with the rooms beyond the open doors 1.6 m back.
 fn hall_walls() -> Vec<Point2<f64>> {
@@ -2145,29 +2158,16 @@ fn hall_walls() -> Vec<Point2<f64>> {
 /// done.
 #[test]
 fn a_plaster_task_whose_stations_are_all_given_up_fails_saying_why() {
-    let plan = apartment();
-    let mut robot = Robot::at(Pose2::new(3.4, 0.6, 0.0));
-    robot.in_room(&plan, 2);
-    let mut cfg = config(true);
-    cfg.spray = Some(stucco_plan::SprayTool::default());
-    cfg.floor = Some(plan.clone());
-    cfg.safety.obstacle_margin_m = 0.03;
-    cfg.safety.lateral_margin_m = 0.02;
     let mut task = plaster(false);
     if let TaskSpec::Plaster { walls, ceiling, .. } = &mut task {
         *walls = vec![WallName::East, WallName::West];
         *ceiling = false;
     }
-    let mut exec = Executive::new(cfg, vec![task]);
+    let (_, mut robot, mut exec) = in_the_hall(task);
     let walls = hall_walls();
     let mut given_up = 0;
     for _ in 0..(2000.0 / DT) as usize {
-        let to_robot = robot.pose.inverse();
-        let seen: Vec<Point2<f64>> = walls
-            .iter()
-            .map(|p| to_robot.transform_point(p))
-            .filter(|p| p.coords.norm() < 3.0)
-            .collect();
+        let seen = within_3_m(&robot, &walls);
         let out = ask_seeing(&mut exec, &robot, &seen);
         given_up += out
             .events
