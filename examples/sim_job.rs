@@ -45,7 +45,7 @@ fn main() -> Result<()> {
             println!("  {:<18} {:?}", task.name, task.status);
         }
     }
-    for name in ["map", "coat-south"] {
+    for name in ["map", "coat-wall1"] {
         let svg = out.join(name).with_extension("svg");
         if svg.exists() {
             let text = std::fs::read_to_string(&svg).with_context(|| svg.display().to_string())?;

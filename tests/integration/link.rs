@@ -276,13 +276,13 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
             landmark: None,
         },
         Command::FollowWall {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             standoff_m: -1.0,
             from_m: 2.6,
             to_m: 3.6,
         },
         Command::AlignToWall {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             standoff_m: -1.0,
             at_m: 3.4,
             side: Side::Left,

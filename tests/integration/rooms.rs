@@ -159,6 +159,6 @@ task = "map_room"
     assert_eq!(r.outcome, "done", "{:?}", r.reason);
     // The drawing's door, and no other.
     assert_eq!(r.doors.len(), 1, "{:?}", r.doors);
-    assert_eq!(r.doors[0].wall, stucco_core::WallName::East);
+    assert_eq!(r.doors[0].wall, stucco_core::WallName::EAST);
     assert!(r.doors[0].error_m < 0.05, "{:?}", r.doors);
 }

@@ -367,7 +367,8 @@ enum OpAction {
     /// Plaster one surface of the room, whole (the robot surveys, plans
     /// and sprays with the mission's spray tool).
     Plaster {
-        /// The surface: west, south, east, north (walls) or ceiling.
+        /// The surface: a wall by its index (in a rectangular room also
+        /// west, south, east or north) or ceiling.
         #[arg(long, value_parser = parse_surface)]
         surface: SurfaceId,
         /// Only a part of the wall: FROM,TO along it and BOTTOM,TOP above
@@ -411,7 +412,8 @@ enum OpAction {
     },
     /// Follow a wall at a standoff.
     FollowWall {
-        /// west, south, east or north.
+        /// The wall: its index (in a rectangular room also west, south,
+        /// east or north).
         #[arg(long, value_parser = parse_wall)]
         wall: WallName,
         /// Distance from the wall, m.
@@ -426,7 +428,8 @@ enum OpAction {
     },
     /// Stop parallel to a wall.
     Align {
-        /// west, south, east or north.
+        /// The wall: its index (in a rectangular room also west, south,
+        /// east or north).
         #[arg(long, value_parser = parse_wall)]
         wall: WallName,
         /// Distance from the wall, m.
@@ -517,9 +520,9 @@ enum BenchAction {
 fn parse_surface(s: &str) -> Result<SurfaceId, String> {
     match s {
         "ceiling" => Ok(SurfaceId::Ceiling),
-        wall => parse_wall(wall)
-            .map(SurfaceId::Wall)
-            .map_err(|_| format!("{s}: one of west, south, east, north, ceiling")),
+        wall => parse_wall(wall).map(SurfaceId::Wall).map_err(|_| {
+            format!("{s}: a wall's index (0, 1, ...), west, south, east, north or ceiling")
+        }),
     }
 }
 
@@ -542,8 +545,12 @@ fn parse_region(s: &str) -> Result<stucco_core::Region, String> {
 }
 
 fn parse_wall(s: &str) -> Result<WallName, String> {
-    serde_json::from_value(serde_json::Value::String(s.to_owned()))
-        .map_err(|_| format!("{s}: one of west, south, east, north"))
+    match s.parse::<usize>() {
+        Ok(i) if i <= usize::from(u16::MAX) => Ok(WallName::new(i)),
+        _ => WallName::compass(s).ok_or_else(|| {
+            format!("{s}: a wall's index (0, 1, ...) or, in a rectangular room, west, south, east or north")
+        }),
+    }
 }
 
 /// `stucco bench`.

@@ -6,7 +6,7 @@ use anyhow::{Result, anyhow};
 use serde::Serialize;
 use std::time::{Duration, Instant};
 use stucco_core::telemetry::{Estimate, Event, PlasterCoverage};
-use stucco_core::{Ack, Command, Reply, RobotState, Stamp, SurfaceId, Telecommand};
+use stucco_core::{Ack, Command, Reply, RobotState, Stamp, Telecommand};
 use stucco_link::{LinkConfig, OperatorClient, ScanFrame, keys, parse};
 
 /// Retry period of an unanswered command.
@@ -485,14 +485,11 @@ impl WatchView {
             .surfaces
             .iter()
             .map(|s| {
-                let name = match s.surface {
-                    SurfaceId::Wall(_) => format!("wall {}", s.surface.name()),
-                    SurfaceId::Ceiling => "ceiling".to_owned(),
-                };
+                let name = s.surface.name();
                 let mut part = if s.planned_spray_s > 0.0 {
-                    format!("{name} {:.0}%", s.done_pct())
+                    format!("{name}: {:.0}%", s.done_pct())
                 } else {
-                    format!("{name} nothing planned")
+                    format!("{name}: nothing planned")
                 };
                 if s.unreachable_m2 > 0.0 {
                     part += &format!(" ({:.2} m² out of reach)", s.unreachable_m2);
@@ -544,8 +541,8 @@ impl<T: serde::de::DeserializeOwned> Feed<T> {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use stucco_core::WallName;
     use stucco_core::telemetry::{EventKind, SurfaceCoverage, TaskFailure};
+    use stucco_core::{SurfaceId, WallName};
 
     #[test]
     fn text_from_a_robot_cannot_forge_a_line() {
@@ -565,7 +562,7 @@ mod tests {
             stations: 14,
             surfaces: vec![
                 SurfaceCoverage {
-                    surface: SurfaceId::Wall(WallName::South),
+                    surface: SurfaceId::Wall(WallName::SOUTH),
                     planned_spray_s: 200.0,
                     done_spray_s: 50.0,
                     unreachable_m2: 0.0,
@@ -582,12 +579,12 @@ mod tests {
         assert_eq!(
             view.coverage_line(&c).as_deref(),
             Some(
-                "coverage  station 3/14 · wall south 25% · ceiling nothing planned (0.40 m² out of reach)"
+                "coverage  station 3/14 · wall 1: 25% · ceiling: nothing planned (0.40 m² out of reach)"
             )
         );
         assert_eq!(view.coverage_line(&c), None);
         c.surfaces[0].done_spray_s = 60.0;
-        assert!(view.coverage_line(&c).unwrap().contains("wall south 30%"));
+        assert!(view.coverage_line(&c).unwrap().contains("wall 1: 30%"));
     }
 
     #[test]

@@ -50,7 +50,7 @@ pub(crate) fn room_openings<'a>(
                 .collect();
             let mid = (e[0] + e[1]) / 2.0;
             WallName::ALL.iter().find_map(|&w| {
-                let g = WallLine::of(w, frame.size_m);
+                let g = WallLine::of(w, frame.size_m)?;
                 (g.inward.dot(&(mid - g.origin)).abs() < 0.2).then(|| {
                     let (a, b) = (
                         g.along.dot(&(e[0] - g.origin)),
@@ -83,6 +83,7 @@ pub(crate) fn true_room(layout: &Layout, frame: &RoomFrame) -> RoomModel {
         .collect();
     RoomModel {
         size_m: frame.size_m,
+        corners: Vec::new(),
         height_m,
         openings,
         obstacles: Vec::new(),
@@ -464,8 +465,8 @@ pub(crate) fn draw_coats(
     let grids = room_coats(sim.coats(), frame, &room);
     for (s, g) in room.surfaces().iter().zip(&grids) {
         let name = match s.id {
-            SurfaceId::Ceiling => "ceiling",
-            SurfaceId::Wall(_) => s.id.name(),
+            SurfaceId::Ceiling => "ceiling".to_owned(),
+            SurfaceId::Wall(w) => format!("wall{}", w.index()),
         };
         let path = dir.join(format!("coat-{prefix}{name}.svg"));
         let [su, sv] = s.size_m();

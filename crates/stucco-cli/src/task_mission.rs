@@ -519,8 +519,8 @@ impl<P: Simulated> Sink<P> for SimRun<'_> {
             }),
         ) = (exec.current_task(), exec.current_behaviour())
             && let TaskSpec::FollowWall { from_m, to_m, .. } = exec.tasks()[task]
+            && let Some(g) = WallGeometry::of(wall, self.frame.size_m)
         {
-            let g = WallGeometry::of(wall, self.frame.size_m);
             let p = truth.position().coords;
             let at = g.position(&p);
             if (to_m > from_m && at >= from_m) || (to_m < from_m && at <= from_m) {
@@ -917,10 +917,10 @@ impl<'a, P: Simulated> SimJob<'a, P> {
         let doors = est
             .doors
             .iter()
-            .map(|d| {
-                let g = WallGeometry::of(d.wall, est.room_m);
+            .filter_map(|d| {
+                let g = WallGeometry::of(d.wall, est.room_m)?;
                 let c = Point2::from(g.point(d.position_m, 0.0));
-                DoorReport {
+                Some(DoorReport {
                     wall: d.wall,
                     position_m: d.position_m,
                     width_m: d.width_m,
@@ -928,7 +928,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
                         .iter()
                         .map(|t| (t - c).norm())
                         .fold(f64::INFINITY, f64::min),
-                }
+                })
             })
             .collect();
         // Every room the robot has been in, each in its true frame.
@@ -1244,9 +1244,9 @@ fn draw_run(
     let doors: Vec<(f64, f64)> = est
         .doors
         .iter()
-        .map(|d| {
-            let c = WallGeometry::of(d.wall, est.room_m).point(d.position_m, 0.0);
-            (c.x, c.y)
+        .filter_map(|d| {
+            let c = WallGeometry::of(d.wall, est.room_m)?.point(d.position_m, 0.0);
+            Some((c.x, c.y))
         })
         .collect();
     draw_plan(

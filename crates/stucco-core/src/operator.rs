@@ -6,46 +6,109 @@
 use crate::Stamp;
 use serde::{Deserialize, Serialize};
 
-/// A wall of the current room, by the side of the room it closes.
+/// A wall of a room, by its index in the room.
 ///
-/// The room frame has its origin in the room's south-west corner, x east
-/// and y north, as the room filter keeps it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum WallName {
-    /// `x = 0`.
-    West,
-    /// `y = 0`.
-    South,
-    /// `x = xs`.
-    East,
-    /// `y = ys`.
-    North,
-}
+/// A room drawn by its corners (counter-clockwise) has its walls numbered
+/// from 0, wall `k` running from corner `k` to corner `k + 1`. A
+/// rectangular room, whose frame has its origin in the south-west corner,
+/// x east and y north, as the room filter keeps it, has walls 0 (`x = 0`,
+/// west), 1 (`y = 0`, south), 2 (`x = xs`, east) and 3 (`y = ys`,
+/// north).
+///
+/// Files and telecommands give a wall by its index (`1`) or, in a
+/// rectangular room, by its compass name (`"south"`); reports give the
+/// index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct WallName(u16);
 
 impl WallName {
-    /// The four walls, in the room filter's order.
+    /// `x = 0` of a rectangular room.
+    pub const WEST: WallName = WallName(0);
+    /// `y = 0` of a rectangular room.
+    pub const SOUTH: WallName = WallName(1);
+    /// `x = xs` of a rectangular room.
+    pub const EAST: WallName = WallName(2);
+    /// `y = ys` of a rectangular room.
+    pub const NORTH: WallName = WallName(3);
+
+    /// The four walls of a rectangular room, in the room filter's order.
     pub const ALL: [WallName; 4] = [
-        WallName::West,
-        WallName::South,
-        WallName::East,
-        WallName::North,
+        WallName::WEST,
+        WallName::SOUTH,
+        WallName::EAST,
+        WallName::NORTH,
     ];
 
-    /// The room filter's index of the wall (0: x = 0, 1: y = 0, 2: x = xs,
-    /// 3: y = ys).
-    pub fn index(self) -> usize {
-        match self {
-            WallName::West => 0,
-            WallName::South => 1,
-            WallName::East => 2,
-            WallName::North => 3,
-        }
+    /// The compass names of a rectangular room's walls, by index.
+    pub const COMPASS: [&'static str; 4] = ["west", "south", "east", "north"];
+
+    /// Wall `index` of its room.
+    ///
+    /// # Panics
+    /// When `index` does not fit in 16 bits: no room has that many walls.
+    pub fn new(index: usize) -> WallName {
+        WallName(u16::try_from(index).unwrap_or_else(|_| panic!("wall index {index} too large")))
     }
 
-    /// The wall of filter index `i`.
+    /// Its index in the room.
+    pub fn index(self) -> usize {
+        usize::from(self.0)
+    }
+
+    /// Wall `i` of a rectangular room (0..4).
     pub fn from_index(i: usize) -> Option<WallName> {
         WallName::ALL.get(i).copied()
+    }
+
+    /// The wall a rectangular room's compass name names.
+    pub fn compass(name: &str) -> Option<WallName> {
+        WallName::COMPASS
+            .iter()
+            .position(|&c| c == name)
+            .map(WallName::new)
+    }
+
+    /// Its compass name, were it a rectangular room's.
+    pub fn compass_name(self) -> Option<&'static str> {
+        WallName::COMPASS.get(self.index()).copied()
+    }
+}
+
+impl std::fmt::Display for WallName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "wall {}", self.0)
+    }
+}
+
+impl Serialize for WallName {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_u16(self.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for WallName {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<WallName, D::Error> {
+        struct Visit;
+        impl serde::de::Visitor<'_> for Visit {
+            type Value = WallName;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a wall's index in its room (0, 1, ...) or, in a rectangular room, `west`, `south`, `east` or `north`")
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<WallName, E> {
+                u16::try_from(v)
+                    .map(WallName)
+                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Unsigned(v), &self))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<WallName, E> {
+                u16::try_from(v)
+                    .map(WallName)
+                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Signed(v), &self))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<WallName, E> {
+                WallName::compass(v).ok_or_else(|| E::unknown_variant(v, &WallName::COMPASS))
+            }
+        }
+        d.deserialize_any(Visit)
     }
 }
 
@@ -191,9 +254,9 @@ pub struct Region {
     pub height_m: [f64; 2],
 }
 
-/// A surface of a room: a wall or the ceiling (`{"wall": "south"}`,
-/// `"ceiling"`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// A surface of a room: a wall or the ceiling (`{"wall": 1}`, in a
+/// rectangular room also `{"wall": "south"}`; `"ceiling"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SurfaceId {
     /// A wall.
@@ -205,21 +268,18 @@ pub enum SurfaceId {
 impl SurfaceId {
     /// The five surfaces of a rectangular room.
     pub const ALL: [SurfaceId; 5] = [
-        SurfaceId::Wall(WallName::West),
-        SurfaceId::Wall(WallName::South),
-        SurfaceId::Wall(WallName::East),
-        SurfaceId::Wall(WallName::North),
+        SurfaceId::Wall(WallName::WEST),
+        SurfaceId::Wall(WallName::SOUTH),
+        SurfaceId::Wall(WallName::EAST),
+        SurfaceId::Wall(WallName::NORTH),
         SurfaceId::Ceiling,
     ];
 
-    /// A short name for reports and file names.
-    pub fn name(self) -> &'static str {
+    /// A short name for reports and file names (`wall 1`, `ceiling`).
+    pub fn name(self) -> String {
         match self {
-            SurfaceId::Wall(WallName::West) => "west",
-            SurfaceId::Wall(WallName::South) => "south",
-            SurfaceId::Wall(WallName::East) => "east",
-            SurfaceId::Wall(WallName::North) => "north",
-            SurfaceId::Ceiling => "ceiling",
+            SurfaceId::Wall(w) => w.to_string(),
+            SurfaceId::Ceiling => "ceiling".to_owned(),
         }
     }
 }
@@ -305,7 +365,7 @@ mod tests {
         assert_eq!(
             read(r#"{"wall": "south"}"#).unwrap(),
             Command::PlasterSurface {
-                surface: SurfaceId::Wall(WallName::South),
+                surface: SurfaceId::Wall(WallName::SOUTH),
                 region: None,
             }
         );
@@ -325,6 +385,31 @@ mod tests {
         }
     }
 
+    /// A wall is its index in its room, or in a rectangular room its
+    /// compass name; it is written as its index. Anything else is refused
+    /// naming the value.
+    #[test]
+    fn a_wall_is_named_by_its_index_or_its_compass_name() {
+        let read = |v: &str| serde_json::from_str::<SurfaceId>(&format!("{{\"wall\": {v}}}"));
+        assert_eq!(read("1").unwrap(), SurfaceId::Wall(WallName::SOUTH));
+        assert_eq!(read("\"south\"").unwrap(), SurfaceId::Wall(WallName::SOUTH));
+        assert_eq!(read("6").unwrap(), SurfaceId::Wall(WallName::new(6)));
+        assert_eq!(
+            serde_json::to_string(&SurfaceId::Wall(WallName::NORTH)).unwrap(),
+            r#"{"wall":3}"#
+        );
+        for (bad, named) in [("-1", "-1"), ("70000", "70000"), ("\"up\"", "`up`")] {
+            let e = read(bad).unwrap_err().to_string();
+            assert!(e.contains(named), "{e}");
+        }
+        let toml: std::collections::BTreeMap<String, WallName> =
+            toml::from_str("a = 2\nb = \"west\"").unwrap();
+        assert_eq!(toml["a"], WallName::EAST);
+        assert_eq!(toml["b"], WallName::WEST);
+        assert_eq!(WallName::new(4).to_string(), "wall 4");
+        assert_eq!(WallName::new(4).compass_name(), None);
+    }
+
     /// A region and a landmark are read with their fields; a field they
     /// do not have, or a landmark that is not one, is refused naming it.
     #[test]
@@ -337,7 +422,7 @@ mod tests {
         assert_eq!(
             plaster(r#"{"along_m": [1.0, 2.5], "height_m": [0.0, 1.2]}"#).unwrap(),
             Command::PlasterSurface {
-                surface: SurfaceId::Wall(WallName::South),
+                surface: SurfaceId::Wall(WallName::SOUTH),
                 region: Some(Region {
                     along_m: [1.0, 2.5],
                     height_m: [0.0, 1.2],
@@ -379,7 +464,7 @@ mod tests {
         assert!(matches!(
             t.command,
             Command::FollowWall {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 ..
             }
         ));

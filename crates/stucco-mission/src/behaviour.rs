@@ -265,7 +265,9 @@ impl Behaviour {
                 },
                 BehaviourKind::FollowWall { wall, to_m, .. },
             ) => {
-                let g = WallGeometry::of(*wall, est.room_m);
+                let Some(g) = WallGeometry::of(*wall, est.room_m) else {
+                    return Step::Done;
+                };
                 let at = g.position(&pose.position().coords);
                 let remaining = if *forward { *to_m - at } else { at - *to_m };
                 if remaining <= 0.005 {

@@ -4,7 +4,7 @@
 //! connect, and where the next room's frame lies once the robot has gone
 //! through a door. Routes between named rooms run over its doors.
 
-use crate::model::WallGeometry;
+use crate::model::{WallGeometry, rectangle_walls};
 use crate::task::WallName;
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -247,18 +247,16 @@ impl FloorPlan {
                     .ok_or_else(|| fault("door", i, "rooms", format!("no room {name:?}")))?;
                 let r = &rooms[room];
                 let at = Vector2::new(d.at_m[0] - r.origin_m[0], d.at_m[1] - r.origin_m[1]);
-                WallName::ALL
-                    .iter()
-                    .map(|&w| (w, WallGeometry::of(w, r.size_m)))
+                rectangle_walls(r.size_m)
                     .filter(|(_, g)| g.distance(&at).abs() <= DOOR_IN_WALL_M)
+                    .find(|(_, g)| {
+                        let along = g.position(&at);
+                        along - d.width_m / 2.0 >= 0.0 && along + d.width_m / 2.0 <= g.length_m
+                    })
                     .map(|(wall, g)| DoorSide {
                         room,
                         wall,
                         along_m: g.position(&at),
-                    })
-                    .find(|s| {
-                        let len = WallGeometry::of(s.wall, r.size_m).length_m;
-                        s.along_m - d.width_m / 2.0 >= 0.0 && s.along_m + d.width_m / 2.0 <= len
                     })
                     .ok_or_else(|| {
                         fault(
@@ -308,8 +306,7 @@ impl FloorPlan {
             }
             let r = &self.rooms[room];
             let at = Vector2::new(w.at_m[0] - r.origin_m[0], w.at_m[1] - r.origin_m[1]);
-            let in_wall = WallName::ALL.iter().any(|&wall| {
-                let g = WallGeometry::of(wall, r.size_m);
+            let in_wall = rectangle_walls(r.size_m).any(|(_, g)| {
                 let along = g.position(&at);
                 g.distance(&at).abs() <= DOOR_IN_WALL_M
                     && along - w.width_m / 2.0 >= 0.0
@@ -462,14 +459,14 @@ impl FloorPlan {
         let next = self.beyond(door, room)?;
         let (a, b) = (&self.rooms[room], &self.rooms[next]);
         // The door's middle as the filter places it, and as the plan does.
-        let est = WallGeometry::of(here.wall, size_m).point(along_m, 0.0);
-        let plan = WallGeometry::of(here.wall, a.size_m).point(here.along_m, 0.0);
+        let est = WallGeometry::of(here.wall, size_m)?.point(along_m, 0.0);
+        let plan = WallGeometry::of(here.wall, a.size_m)?.point(here.along_m, 0.0);
         let p = pose.position().coords + (plan - est);
         let shift = Vector2::from(a.origin_m) - Vector2::from(b.origin_m);
         let mut q = p + shift;
         if let Some((along, size)) = there {
-            let drawn = WallGeometry::of(far.wall, b.size_m).point(far.along_m, 0.0);
-            q += WallGeometry::of(far.wall, size).point(along, 0.0) - drawn;
+            let drawn = WallGeometry::of(far.wall, b.size_m)?.point(far.along_m, 0.0);
+            q += WallGeometry::of(far.wall, size)?.point(along, 0.0) - drawn;
         }
         Some((next, Pose2::new(q.x, q.y, pose.theta)))
     }
@@ -520,13 +517,13 @@ mod tests {
     fn doors_are_placed_in_their_walls() {
         let p = plan();
         let s = p.side(0, 0).unwrap();
-        assert_eq!(s.wall, WallName::North);
+        assert_eq!(s.wall, WallName::NORTH);
         assert!((s.along_m - 2.0).abs() < 1e-9, "{s:?}");
         let s = p.side(0, 1).unwrap();
-        assert_eq!(s.wall, WallName::South);
+        assert_eq!(s.wall, WallName::SOUTH);
         assert!((s.along_m - 2.0).abs() < 1e-9);
-        assert_eq!(p.side(2, 1).unwrap().wall, WallName::East);
-        assert_eq!(p.side(2, 2).unwrap().wall, WallName::West);
+        assert_eq!(p.side(2, 1).unwrap().wall, WallName::EAST);
+        assert_eq!(p.side(2, 2).unwrap().wall, WallName::WEST);
         assert_eq!(p.side(2, 0), None);
     }
 
@@ -568,7 +565,7 @@ mod tests {
         assert_eq!(q.doors_of(1).map(|(d, _)| d).collect::<Vec<_>>(), [0]);
         let shut: Vec<_> = q.shut_doors_of(2).collect();
         assert_eq!(shut.len(), 1);
-        assert_eq!((shut[0].0, shut[0].1.wall), (2, WallName::West));
+        assert_eq!((shut[0].0, shut[0].1.wall), (2, WallName::WEST));
         assert_eq!(q.doors()[2].height_m, Some(2.05));
         // Read from a drawing and written back the same.
         let text = toml::to_string(&PlanText::from(q.clone())).unwrap();

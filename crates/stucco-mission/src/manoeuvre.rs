@@ -115,13 +115,13 @@ impl<'a> Space<'a> {
     ) -> Self {
         let doorways = doors
             .iter()
-            .map(|d| {
+            .filter_map(|d| {
                 let half = 0.5 * d.width_m.unwrap_or(vehicle.width_m + 0.1);
-                Doorway {
-                    wall: WallGeometry::of(d.wall, room_m),
+                Some(Doorway {
+                    wall: WallGeometry::of(d.wall, room_m)?,
                     from_m: d.position_m - half,
                     to_m: d.position_m + half,
-                }
+                })
             })
             .collect();
         // The field's length past a move's end: its margin, and what the
@@ -550,14 +550,14 @@ mod tests {
         let v = VehicleSpec::default();
         let doors = [
             DoorEstimate {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 position_m: 3.55,
                 width_m: Some(0.9),
                 sigma_m: 0.01,
                 plan_door: None,
             },
             DoorEstimate {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 position_m: 6.6,
                 width_m: Some(0.8),
                 sigma_m: 0.01,
@@ -628,7 +628,7 @@ mod tests {
         // door at 3.4 m, a chair 0.8 m ahead and to its left.
         let v = VehicleSpec::default();
         let doors = [DoorEstimate {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             position_m: 3.4,
             width_m: Some(0.8),
             sigma_m: 0.01,

@@ -351,10 +351,13 @@ impl PlasterRun {
     /// robot's line runs at (middle lanes: the south wall's line).
     pub fn lane_line(&self, k: usize) -> Option<(WallLine, f64)> {
         let s = self.plan.stations.get(k)?;
-        let room = self.plan.room.size_m;
         Some(match s.lane {
-            Lane::Wall(w) => (WallLine::of(w, room), self.plan.tool.robot_standoff_m),
-            Lane::Middle(_) => (WallLine::of(stucco_core::WallName::South, room), s.base.y),
+            Lane::Wall(w) => (self.plan.room.wall(w)?, self.plan.tool.robot_standoff_m),
+            // A middle lane runs east: along the x axis, at its y.
+            Lane::Middle(_) => (
+                WallLine::between([0.0, 0.0], [self.plan.room.size_m[0], 0.0]),
+                s.base.y,
+            ),
         })
     }
 }

@@ -633,7 +633,7 @@ mod tests {
     #[test]
     fn values_out_of_range_are_named() {
         let t = TaskSpec::FollowWall {
-            wall: WallName::North,
+            wall: WallName::NORTH,
             standoff_m: 0.6,
             from_m: 2.0,
             to_m: 2.05,

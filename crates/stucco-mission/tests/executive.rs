@@ -245,7 +245,7 @@ fn move_relative_ends_at_the_goal_turning_on_the_spot() {
 /// A pass along the south wall at 0.6 m, from 3 m to 4 m along it.
 fn south_pass() -> TaskSpec {
     TaskSpec::FollowWall {
-        wall: WallName::South,
+        wall: WallName::SOUTH,
         standoff_m: 0.6,
         from_m: 3.0,
         to_m: 4.0,
@@ -301,7 +301,7 @@ fn a_pass_too_near_the_corner_is_refused_with_a_reason() {
     let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
     let mut exec = executive(
         vec![TaskSpec::FollowWall {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             standoff_m: 0.6,
             from_m: 1.0,
             to_m: 4.0,
@@ -317,7 +317,7 @@ fn a_pass_too_near_the_corner_is_refused_with_a_reason() {
     // And a pass running into the end wall.
     let mut exec = executive(
         vec![TaskSpec::FollowWall {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             standoff_m: 0.6,
             from_m: 2.6,
             to_m: 4.6,
@@ -336,7 +336,7 @@ fn a_failure_is_typed_in_events_and_replies_with_its_sentence() {
     let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
     let mut exec = executive(
         vec![TaskSpec::FollowWall {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             standoff_m: 0.6,
             from_m: 1.0,
             to_m: 4.0,
@@ -374,7 +374,7 @@ fn a_failure_is_typed_in_events_and_replies_with_its_sentence() {
         "f1",
         Stamp::ZERO,
         Command::FollowWall {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             standoff_m: 0.6,
             from_m: 1.0,
             to_m: 4.0,
@@ -788,7 +788,7 @@ fn a_task_from_the_operator_is_accepted_then_done() {
 #[test]
 fn the_operator_has_one_surface_plastered() {
     let south = Command::PlasterSurface {
-        surface: SurfaceId::Wall(WallName::South),
+        surface: SurfaceId::Wall(WallName::SOUTH),
         region: None,
     };
     let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
@@ -821,6 +821,21 @@ fn the_operator_has_one_surface_plastered() {
         }],
     );
     tick_with(&mut exec, &mut robot, &[]);
+    // A wall the room does not have is refused at once.
+    let p0 = command(
+        "p0",
+        robot.now,
+        Command::PlasterSurface {
+            surface: SurfaceId::Wall(WallName::new(7)),
+            region: None,
+        },
+    );
+    let out = tick_with(&mut exec, &mut robot, &[p0]);
+    assert!(
+        matches!(&out.acks[0].reply, Reply::Rejected { reason } if reason.contains("no wall 7")),
+        "{:?}",
+        out.acks
+    );
     let p1 = command("p1", robot.now, south);
     let first = tick_with(&mut exec, &mut robot, &[p1]);
     assert_eq!(first.acks[0].reply, Reply::Accepted);
@@ -833,7 +848,7 @@ fn the_operator_has_one_surface_plastered() {
             .filter(|e| matches!(e.kind, EventKind::PassDone { .. }))
             .count();
         if let Some(plan) = exec.plaster_plan() {
-            surfaces.extend(plan.passes().map(|(_, p)| format!("{:?}", p.surface)));
+            surfaces.extend(plan.passes().map(|(_, p)| p.surface));
         }
         if let Some(a) = out.acks.iter().find(|a| a.id == "p1") {
             done = Some(a.reply.clone());
@@ -843,7 +858,7 @@ fn the_operator_has_one_surface_plastered() {
     assert_eq!(done, Some(Reply::Done), "{:?}", exec.status());
     assert_eq!(
         surfaces.into_iter().collect::<Vec<_>>(),
-        ["Wall(South)"],
+        [SurfaceId::Wall(WallName::SOUTH)],
         "planned on other surfaces"
     );
     assert!(passes > 0);
@@ -1253,7 +1268,7 @@ fn survey_knowing_a_window(
     let mut exec = Executive::new(cfg, vec![plaster(true)]);
     let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
     robot.windows.push(WindowEstimate {
-        wall: WallName::North,
+        wall: WallName::NORTH,
         along_m: [1.8, 3.0],
         sill_head_m: [0.9, 2.1],
         along_sigma_m: [0.005, far_sigma_m],
@@ -1261,7 +1276,7 @@ fn survey_knowing_a_window(
     // A door the camera found as an opening down to the floor, its edges
     // as loose: the laser's to measure, not looked at.
     robot.windows.push(WindowEstimate {
-        wall: WallName::South,
+        wall: WallName::SOUTH,
         along_m: [1.0, 1.9],
         sill_head_m: [0.0, 2.0],
         along_sigma_m: [far_sigma_m; 2],
@@ -1311,7 +1326,7 @@ fn edge_looks(events: &[Event]) -> Vec<(WallName, f64, f64)> {
 fn a_window_edge_known_loosely_is_swept_slowly_before_the_plan_is_made() {
     let left = std::f64::consts::FRAC_PI_2;
     let (events, poses) = survey_knowing_a_window(0.02, Some(left));
-    assert_eq!(edge_looks(&events), vec![(WallName::North, 3.0, 0.02)]);
+    assert_eq!(edge_looks(&events), vec![(WallName::NORTH, 3.0, 0.02)]);
     assert!(
         slow_crossings(&poses, left) >= 1,
         "the fan never swept the edge slowly"
@@ -1328,7 +1343,7 @@ fn a_window_edge_known_loosely_is_swept_slowly_before_the_plan_is_made() {
 fn a_window_edge_is_looked_at_with_the_camera_the_body_carries() {
     let (left, right) = (std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2);
     let (events, poses) = survey_knowing_a_window(0.02, Some(right));
-    assert_eq!(edge_looks(&events), vec![(WallName::North, 3.0, 0.02)]);
+    assert_eq!(edge_looks(&events), vec![(WallName::NORTH, 3.0, 0.02)]);
     assert!(
         slow_crossings(&poses, right) >= 1,
         "the right-looking fan never swept the edge slowly"
@@ -1344,7 +1359,7 @@ fn a_window_edge_is_looked_at_with_the_camera_the_body_carries() {
 /// edge of [`survey_knowing_a_window`]'s window meeting the wall within
 /// 25° of square, sweeping along it at 0.2 m/s or slower.
 fn slow_crossings(poses: &[Pose2], azimuth_rad: f64) -> usize {
-    let g = WallGeometry::of(WallName::North, ROOM);
+    let g = WallGeometry::of(WallName::NORTH, ROOM).unwrap();
     let edge = g.origin + g.along * 3.0;
     let fan = |p: &Pose2| p.theta + azimuth_rad;
     poses
@@ -1754,7 +1769,7 @@ fn a_move_relative_to_a_door_or_a_wall_ends_in_its_frame() {
     };
     let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
     robot.doors = vec![DoorEstimate {
-        wall: WallName::South,
+        wall: WallName::SOUTH,
         position_m: 2.5,
         width_m: Some(0.9),
         sigma_m: 0.01,
@@ -1773,7 +1788,7 @@ fn a_move_relative_to_a_door_or_a_wall_ends_in_its_frame() {
         "{p:?}"
     );
     // Facing the east wall (x = 5) from 1.2 m, half a metre to its left.
-    let mut exec = executive(vec![to(Landmark::Wall(WallName::East), -1.2, 0.5)], true);
+    let mut exec = executive(vec![to(Landmark::Wall(WallName::EAST), -1.2, 0.5)], true);
     run(&mut exec, &mut robot, 60.0, |_, _| Vec::new());
     let p = robot.pose;
     assert!(
@@ -1823,7 +1838,7 @@ fn the_operator_has_a_region_of_a_wall_plastered() {
         out.acks
     );
     let south = Command::PlasterSurface {
-        surface: SurfaceId::Wall(WallName::South),
+        surface: SurfaceId::Wall(WallName::SOUTH),
         region: Some(region),
     };
     let r = command("r", robot.now, south);
@@ -1844,7 +1859,7 @@ fn the_operator_has_a_region_of_a_wall_plastered() {
     let plan = plan.expect("a plan");
     let mut strokes = 0;
     for (_, pass) in plan.passes() {
-        assert_eq!(pass.surface, stucco_plan::SurfaceId::Wall(WallName::South));
+        assert_eq!(pass.surface, stucco_plan::SurfaceId::Wall(WallName::SOUTH));
         for m in pass.moves.iter().filter(|m| m.spray) {
             strokes += 1;
             for p in [m.from_m, m.to_m] {
@@ -2051,10 +2066,10 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
     for w in WallName::ALL {
         assert!(lanes(&first, w) > 0, "{w:?}");
     }
-    for w in [WallName::East, WallName::West] {
+    for w in [WallName::EAST, WallName::WEST] {
         assert_eq!(lanes(&last, w), 0, "{w:?}");
     }
-    let end_walls = lanes(&first, WallName::East) + lanes(&first, WallName::West);
+    let end_walls = lanes(&first, WallName::EAST) + lanes(&first, WallName::WEST);
     assert_eq!(given_up.len(), end_walls, "{given_up:?}");
     assert_eq!(last.stations.len() + end_walls, first.stations.len());
     assert_eq!(
@@ -2070,7 +2085,7 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
             .map(|u| u.area_m2)
             .sum::<f64>()
     };
-    for w in [WallName::East, WallName::West] {
+    for w in [WallName::EAST, WallName::WEST] {
         assert!(
             (2.3..2.5).contains(&lost(&last, w)),
             "{w:?}: {}",
@@ -2080,7 +2095,7 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
     // Nothing of the long walls is lost with them, and of the ceiling
     // only strips along the end walls (the long walls' stations reach
     // the rest).
-    for w in [WallName::North, WallName::South] {
+    for w in [WallName::NORTH, WallName::SOUTH] {
         assert!(lost(&last, w) <= lost(&first, w) + 1e-9, "{w:?}");
     }
     let ceiling = |p: &stucco_plan::Plan| {
@@ -2160,7 +2175,7 @@ fn hall_walls() -> Vec<Point2<f64>> {
 fn a_plaster_task_whose_stations_are_all_given_up_fails_saying_why() {
     let mut task = plaster(false);
     if let TaskSpec::Plaster { walls, ceiling, .. } = &mut task {
-        *walls = vec![WallName::East, WallName::West];
+        *walls = vec![WallName::EAST, WallName::WEST];
         *ceiling = false;
     }
     let (_, mut robot, mut exec) = in_the_hall(task);
@@ -2700,7 +2715,7 @@ fn absurd_targets_are_refused_at_acceptance() {
         (mv(0.0, -1.4), "outside"),
         (
             Command::FollowWall {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 standoff_m: 0.6,
                 from_m: 1.0,
                 to_m: 40.0,
@@ -2709,7 +2724,7 @@ fn absurd_targets_are_refused_at_acceptance() {
         ),
         (
             Command::AlignToWall {
-                wall: WallName::West,
+                wall: WallName::WEST,
                 standoff_m: 9.0,
                 at_m: 1.0,
                 side: Side::Left,
@@ -2726,6 +2741,24 @@ fn absurd_targets_are_refused_at_acceptance() {
             "door 99",
         ),
         (Command::PassDoor { door: 99 }, "door 99"),
+        (
+            Command::FollowWall {
+                wall: WallName::new(5),
+                standoff_m: 0.6,
+                from_m: 1.0,
+                to_m: 2.0,
+            },
+            "no wall 5",
+        ),
+        (
+            Command::MoveRelative {
+                dx_m: -1.0,
+                dy_m: 0.0,
+                dtheta_deg: 0.0,
+                landmark: Some(Landmark::Wall(WallName::new(4))),
+            },
+            "no wall 4",
+        ),
     ]
     .into_iter()
     .enumerate()
@@ -2756,7 +2789,7 @@ fn absurd_targets_are_refused_at_acceptance() {
 #[test]
 fn a_failed_task_leaves_the_robot_ready_for_the_next_command() {
     let impossible_pass = TaskSpec::FollowWall {
-        wall: WallName::South,
+        wall: WallName::SOUTH,
         standoff_m: 0.6,
         from_m: 1.0,
         to_m: 4.0,
@@ -2770,7 +2803,7 @@ fn a_failed_task_leaves_the_robot_ready_for_the_next_command() {
         "f1",
         robot.now,
         Command::FollowWall {
-            wall: WallName::South,
+            wall: WallName::SOUTH,
             standoff_m: 0.6,
             from_m: 1.0,
             to_m: 4.0,

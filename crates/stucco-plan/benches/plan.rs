@@ -12,16 +12,17 @@ use stucco_plan::{OpeningKind, RoomModel, SprayTool, WallOpening, plan, predicte
 fn living_room() -> RoomModel {
     RoomModel {
         size_m: [5.0, 2.85],
+        corners: Vec::new(),
         height_m: 2.6,
         openings: vec![
             WallOpening {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 kind: OpeningKind::Window,
                 along_m: [2.0, 3.2],
                 sill_head_m: [0.9, 2.1],
             },
             WallOpening {
-                wall: WallName::East,
+                wall: WallName::EAST,
                 kind: OpeningKind::Door,
                 along_m: [1.0, 1.9],
                 sill_head_m: [0.0, 2.0],

@@ -20,6 +20,7 @@
 //!
 //! let room = RoomModel {
 //!     size_m: [3.2, 2.6],
+//!     corners: Vec::new(),
 //!     height_m: 2.5,
 //!     openings: Vec::new(),
 //!     obstacles: Vec::new(),
@@ -33,11 +34,13 @@
 #![warn(missing_docs)]
 
 mod coverage;
+mod outline;
 mod planner;
 mod surface;
 mod tool;
 
 pub use coverage::{RoomScore, SurfaceScore, minimum_spray_m2, predict, predicted_score, score};
+pub use outline::Outline;
 pub use planner::{Lane, Move, PLAN_CELL_M, Pass, Plan, ReachMask, Station, Unreachable, plan};
 pub use surface::{
     Obstacle, Opening, OpeningKind, Rect, RoomModel, Surface, SurfaceId, WallLine, WallOpening,

@@ -23,7 +23,8 @@
 //! sofa, under a radiator, too high for the lift) is not planned and is
 //! reported with its area.
 
-use crate::surface::{Opening, OpeningKind, RoomModel, Surface, SurfaceId, WallLine, WallOpening};
+use crate::outline::Outline;
+use crate::surface::{Opening, OpeningKind, RoomModel, Surface, SurfaceId, WallOpening};
 use crate::{PlanError, Rect, SprayTool};
 use serde::{Deserialize, Serialize};
 use stucco_core::{Aim, Pose2, VehicleSpec, WallName};
@@ -481,7 +482,12 @@ pub fn plan(
     start: &Pose2,
 ) -> Result<Plan, PlanError> {
     tool.validate(vehicle.width_m)?;
-    if !(room.size_m[0] > 0.0 && room.size_m[1] > 0.0 && room.height_m > 0.0) {
+    let outline = room.outline();
+    if !(room.size_m[0] > 0.0
+        && room.size_m[1] > 0.0
+        && room.height_m > 0.0
+        && outline.signed_area_m2() > 0.0)
+    {
         return Err(PlanError::Room(format!(
             "a room {:?} m and {} m high has no surfaces",
             room.size_m, room.height_m
@@ -500,7 +506,8 @@ pub fn plan(
         room,
         tool,
         body,
-        floor: Floor::reached(room, body.half_width_m + tool.clearance_m, start),
+        floor: Floor::reached(room, &outline, body.half_width_m + tool.clearance_m, start),
+        outline,
     };
     let surfaces = room.surfaces();
     let mut lanes: Vec<(Lane, Vec<Station>)> = Vec::new();
@@ -616,8 +623,28 @@ impl Body {
     }
 }
 
+/// The largest box of room-frame points about the middle of the
+/// robot-frame box `x × y` at `pose` that lies inside it: that box itself
+/// at a heading that is a multiple of 90°, a square within it at any
+/// other (a station along a wall at an angle).
+fn inscribed_box(pose: &Pose2, x: [f64; 2], y: [f64; 2]) -> [[f64; 2]; 2] {
+    let (s, c) = pose.theta.sin_cos();
+    let (s, c) = (s.abs(), c.abs());
+    if s.min(c) < 1e-9 {
+        return room_box(pose, x, y);
+    }
+    let mid = pose.transform_point(&nalgebra::Point2::new(
+        (x[0] + x[1]) / 2.0,
+        (y[0] + y[1]) / 2.0,
+    ));
+    // A square of half side h has its corners inside the box when h·(|cos|
+    // + |sin|) is within both half sides.
+    let h = ((x[1] - x[0]) / 2.0).min((y[1] - y[0]) / 2.0) / (s + c);
+    [[mid.x - h, mid.y - h], [mid.x + h, mid.y + h]]
+}
+
 /// The box of room-frame points covered by the robot-frame box
-/// `x × y` at `pose` (headings here are multiples of 90°).
+/// `x × y` at `pose`.
 fn room_box(pose: &Pose2, x: [f64; 2], y: [f64; 2]) -> [[f64; 2]; 2] {
     let mut lo = [f64::MAX; 2];
     let mut hi = [f64::MIN; 2];
@@ -633,6 +660,8 @@ fn room_box(pose: &Pose2, x: [f64; 2], y: [f64; 2]) -> [[f64; 2]; 2] {
 
 struct Planner<'a> {
     room: &'a RoomModel,
+    /// The room's floor.
+    outline: Outline,
     tool: &'a SprayTool,
     body: Body,
     floor: Floor,
@@ -654,7 +683,7 @@ struct Floor {
 }
 
 impl Floor {
-    fn reached(room: &RoomModel, radius: f64, start: &Pose2) -> Floor {
+    fn reached(room: &RoomModel, outline: &Outline, radius: f64, start: &Pose2) -> Floor {
         let [xs, ys] = room.size_m;
         let cells = [
             ((xs / REACH_CELL_M).ceil() as usize).max(1),
@@ -668,7 +697,7 @@ impl Floor {
         };
         let open = |i: usize, j: usize| {
             let [x, y] = centre(i, j);
-            x.min(xs - x).min(y).min(ys - y) >= radius
+            outline.clearance_m(&nalgebra::Point2::new(x, y)) >= radius
                 && room.obstacles.iter().all(|o| {
                     let dx = (o.min_m[0] - x).max(x - o.max_m[0]).max(0.0);
                     let dy = (o.min_m[1] - y).max(y - o.max_m[1]).max(0.0);
@@ -750,8 +779,14 @@ impl Planner<'_> {
         let c = self.tool.clearance_m;
         let b = self.body;
         let [lo, hi] = room_box(pose, b.x_m, [-b.half_width_m, b.half_width_m]);
-        let [xs, ys] = self.room.size_m;
-        if lo[0] < c - 1e-9 || lo[1] < c - 1e-9 || hi[0] > xs - c + 1e-9 || hi[1] > ys - c + 1e-9 {
+        let body = [
+            [b.x_m[0], -b.half_width_m],
+            [b.x_m[1], -b.half_width_m],
+            [b.x_m[1], b.half_width_m],
+            [b.x_m[0], b.half_width_m],
+        ]
+        .map(|[x, y]| pose.transform_point(&nalgebra::Point2::new(x, y)));
+        if !self.outline.holds(&body, c) {
             return false;
         }
         !self.room.obstacles.iter().any(|o| {
@@ -765,7 +800,9 @@ impl Planner<'_> {
     /// The stations along wall `w`, far end first.
     fn wall(&self, w: WallName, surface: &Surface) -> Vec<Station> {
         let tool = self.tool;
-        let line = WallLine::of(w, self.room.size_m);
+        let Some(line) = self.room.wall(w) else {
+            return Vec::new();
+        };
         let heading = line.heading_wall_left();
         let sgn = line
             .along
@@ -969,7 +1006,7 @@ impl Planner<'_> {
     fn ceiling_reach(&self, base: &Pose2) -> Rect {
         let gap = self.tool.surface_gap_m;
         let [xs, ys] = self.room.size_m;
-        let [lo, hi] = room_box(base, self.tool.planned_rail_m(), self.tool.planned_arm_m());
+        let [lo, hi] = inscribed_box(base, self.tool.planned_rail_m(), self.tool.planned_arm_m());
         Rect {
             u_m: [lo[0].max(gap), hi[0].min(xs - gap)],
             v_m: [lo[1].max(gap), hi[1].min(ys - gap)],
@@ -980,7 +1017,7 @@ impl Planner<'_> {
     /// as intervals.
     fn missed_spans(&self, y: f64, rects: &[Rect]) -> Vec<[f64; 2]> {
         let gap = self.tool.surface_gap_m;
-        let mut open = vec![[gap, self.room.size_m[0] - gap]];
+        let mut open = self.outline.row_spans(y, gap);
         for q in rects
             .iter()
             .filter(|q| y >= q.v_m[0] - 1e-9 && y <= q.v_m[1] + 1e-9)
@@ -1082,13 +1119,21 @@ impl Planner<'_> {
             .chain((0..stations.len()).filter(|k| !is_wall(k)))
             .collect();
         for &y in &strokes.0 {
+            let inside = self.outline.row_spans(y, self.tool.surface_gap_m);
             let mut taken: Vec<[f64; 2]> = Vec::new();
             for &k in &order {
                 let r = &rects[k];
                 if y < r.v_m[0] - 1e-9 || y > r.v_m[1] + 1e-9 {
                     continue;
                 }
-                let mut free = vec![r.u_m];
+                // The row's stretches inside the room, in the reach.
+                let mut free: Vec<[f64; 2]> = inside
+                    .iter()
+                    .filter_map(|s| {
+                        let (a, b) = (s[0].max(r.u_m[0]), s[1].min(r.u_m[1]));
+                        (b > a).then_some([a, b])
+                    })
+                    .collect();
                 for t in &taken {
                     cut(&mut free, *t);
                 }
@@ -1342,6 +1387,7 @@ mod tests {
     fn room(size_m: [f64; 2], height_m: f64, openings: Vec<WallOpening>) -> RoomModel {
         RoomModel {
             size_m,
+            corners: Vec::new(),
             height_m,
             openings,
             obstacles: Vec::new(),
@@ -1428,7 +1474,7 @@ mod tests {
         assert!(p.unreachable.is_empty(), "{:?}", p.unreachable);
         let stations = p.stations.len();
         let west: Vec<usize> = (0..stations)
-            .filter(|&k| p.stations[k].lane == Lane::Wall(WallName::West))
+            .filter(|&k| p.stations[k].lane == Lane::Wall(WallName::WEST))
             .collect();
         assert!(!west.is_empty());
         let mut lost = 0.0;
@@ -1441,7 +1487,7 @@ mod tests {
         let [u] = p.unreachable.as_slice() else {
             panic!("{:?}", p.unreachable);
         };
-        assert_eq!(u.surface, SurfaceId::Wall(WallName::West));
+        assert_eq!(u.surface, SurfaceId::Wall(WallName::WEST));
         assert!((u.area_m2 - 0.98 * 2.39).abs() < 0.05, "{u:?}");
         assert!((lost - u.area_m2).abs() < 1e-9, "{lost}");
         assert_eq!(p.give_up_station(p.stations.len()), None);
@@ -1484,17 +1530,118 @@ mod tests {
         );
     }
 
+    /// A room drawn by its corners, 2.5 m high, bare.
+    fn drawn(corners: &[[f64; 2]]) -> RoomModel {
+        let (mut xs, mut ys) = (0.0f64, 0.0f64);
+        for c in corners {
+            (xs, ys) = (xs.max(c[0]), ys.max(c[1]));
+        }
+        RoomModel {
+            size_m: [xs, ys],
+            corners: corners.to_vec(),
+            height_m: 2.5,
+            openings: Vec::new(),
+            obstacles: Vec::new(),
+        }
+    }
+
+    /// Rooms that are not rectangles: an L (its notch's two walls are
+    /// walls, the notch is no floor and no ceiling), one with a wall at
+    /// 45°, one with a chimney breast. Every wall gets its lane, every
+    /// station stands inside the room clear of its walls, no stroke
+    /// leaves the surfaces, and the coat covers the walls and the ceiling
+    /// as in a rectangle.
+    #[test]
+    fn a_room_of_any_shape_is_planned_wall_by_wall() {
+        let rooms = [
+            (
+                "L",
+                drawn(&[
+                    [0.0, 0.0],
+                    [6.0, 0.0],
+                    [6.0, 2.5],
+                    [3.5, 2.5],
+                    [3.5, 5.0],
+                    [0.0, 5.0],
+                ]),
+                [1.5, 1.5],
+            ),
+            (
+                "angled",
+                drawn(&[[0.0, 0.0], [5.0, 0.0], [5.0, 2.5], [3.0, 4.5], [0.0, 4.5]]),
+                [2.0, 2.0],
+            ),
+            (
+                "chimney breast",
+                drawn(&[
+                    [0.0, 0.0],
+                    [4.5, 0.0],
+                    [4.5, 4.0],
+                    [2.8, 4.0],
+                    [2.8, 3.55],
+                    [1.6, 3.55],
+                    [1.6, 4.0],
+                    [0.0, 4.0],
+                ]),
+                [2.2, 1.5],
+            ),
+        ];
+        let t = tool();
+        let v = VehicleSpec::default();
+        for (name, room, [x, y]) in rooms {
+            let p = plan(&room, &t, &v, &Pose2::new(x, y, 0.0)).expect("a plan");
+            check_moves(&p);
+            let walls = room.corners.len();
+            assert_eq!(p.surfaces.len(), walls + 1, "{name}");
+            let outline = room.outline();
+            let body = Body::of(&v);
+            for s in &p.stations {
+                let corners = [
+                    [body.x_m[0], -body.half_width_m],
+                    [body.x_m[1], -body.half_width_m],
+                    [body.x_m[1], body.half_width_m],
+                    [body.x_m[0], body.half_width_m],
+                ]
+                .map(|[a, b]| s.base.transform_point(&nalgebra::Point2::new(a, b)));
+                assert!(
+                    outline.holds(&corners, t.clearance_m),
+                    "{name}: {:?}",
+                    s.base
+                );
+            }
+            for k in 0..walls {
+                let lane = Lane::Wall(WallName::new(k));
+                assert!(
+                    p.stations.iter().any(|s| s.lane == lane),
+                    "{name}: no station for wall {k}"
+                );
+            }
+            let s = predicted_score(&p);
+            assert!(
+                s.wall_coverage_pct >= 99.5,
+                "{name}: {s:?} {:?}",
+                p.unreachable
+            );
+            assert!(
+                s.ceiling_coverage_pct >= 99.0,
+                "{name}: {s:?} {:?}",
+                p.unreachable
+            );
+            assert!(s.overspray_pct < 0.5, "{name}: {s:?}");
+        }
+    }
+
     #[test]
     fn strokes_stop_short_of_windows_and_doors() {
         let openings = vec![
             WallOpening {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 kind: OpeningKind::Window,
                 along_m: [1.3, 2.5],
                 sill_head_m: [0.9, 2.1],
             },
             WallOpening {
-                wall: WallName::East,
+                wall: WallName::EAST,
                 kind: OpeningKind::Door,
                 along_m: [0.4, 1.3],
                 sill_head_m: [0.0, 2.0],
@@ -1508,14 +1655,14 @@ mod tests {
         // The strokes across the window are taken below it, then above
         // it: the nozzle crosses it once a pass, not once a stroke.
         let window = p
-            .surface(SurfaceId::Wall(WallName::South))
+            .surface(SurfaceId::Wall(WallName::SOUTH))
             .expect("wall")
             .openings[0]
             .rect;
         let across: Vec<&Pass> = p
             .passes()
             .map(|(_, q)| q)
-            .filter(|q| q.surface == SurfaceId::Wall(WallName::South))
+            .filter(|q| q.surface == SurfaceId::Wall(WallName::SOUTH))
             .filter(|q| {
                 q.moves
                     .iter()
@@ -1563,7 +1710,7 @@ mod tests {
         let north = p
             .unreachable
             .iter()
-            .find(|u| u.surface == SurfaceId::Wall(WallName::North))
+            .find(|u| u.surface == SurfaceId::Wall(WallName::NORTH))
             .expect("the north wall behind the furniture");
         // All of it: the wall less its 10 cm edges, 3.8 × 2.4 m.
         assert!(north.area_m2 > 0.99 * 3.8 * 2.4, "{north:?}");
@@ -1608,14 +1755,14 @@ mod tests {
         let west = p
             .unreachable
             .iter()
-            .find(|u| u.surface == SurfaceId::Wall(WallName::West))
+            .find(|u| u.surface == SurfaceId::Wall(WallName::WEST))
             .expect("the west wall behind the sofa");
         // The sofa spans y 0.6–2.6 of the 3 m wall: most of the wall.
         assert!(west.area_m2 > 2.0 * 2.3, "{west:?}");
         let south = p
             .unreachable
             .iter()
-            .find(|u| u.surface == SurfaceId::Wall(WallName::South))
+            .find(|u| u.surface == SurfaceId::Wall(WallName::SOUTH))
             .expect("below the radiator");
         assert!(
             south.bounds.v_m[0] < 0.2 && south.bounds.v_m[1] > 0.7,
@@ -1627,7 +1774,7 @@ mod tests {
         );
         for (_, pass) in p
             .passes()
-            .filter(|(_, p)| p.surface == SurfaceId::Wall(WallName::South))
+            .filter(|(_, p)| p.surface == SurfaceId::Wall(WallName::SOUTH))
         {
             for m in pass.moves.iter().filter(|m| m.spray) {
                 if m.from_m[0] > 2.0 && m.from_m[0] < 3.0 {
@@ -1695,7 +1842,7 @@ mod tests {
     fn a_window_found_at_a_station_is_kept_out_of_the_passes_from_there_on() {
         let r = room([4.0, 3.0], 2.6, Vec::new());
         let mut p = make(&r);
-        let wall = WallName::East;
+        let wall = WallName::EAST;
         let id = SurfaceId::Wall(wall);
         let on_wall: Vec<usize> = p
             .stations
@@ -1789,7 +1936,7 @@ mod tests {
                 speed_mps: 0.3,
                 spray: w[0].2,
             }).collect();
-            let mut pass = Pass { surface: SurfaceId::Wall(WallName::North), aim: Aim::Left, moves };
+            let mut pass = Pass { surface: SurfaceId::Wall(WallName::NORTH), aim: Aim::Left, moves };
             let before = pass.clone();
             let rect = Rect { u_m: [u0, u0 + du], v_m: [v0, v0 + dv] };
             pass.spray_off_inside(&rect);
@@ -1817,7 +1964,7 @@ mod tests {
             let mut openings: Vec<WallOpening> = Vec::new();
             for (w, at, width, door, sill, height) in ops {
                 let wall = WallName::ALL[w];
-                let len = WallLine::of(wall, [xs, ys]).length_m;
+                let len = crate::WallLine::of(wall, [xs, ys]).map_or(0.0, |l| l.length_m);
                 let width = width.min(len - 0.6);
                 let a = 0.3 + at * (len - 0.6 - width);
                 let sill_head = if door { [0.0, 2.0_f64.min(h - 0.3)] } else { [sill, (sill + height).min(h - 0.2)] };

@@ -8,7 +8,8 @@
 //! `x, y`.
 
 use crate::SprayTool;
-use nalgebra::{Point3, Vector2, Vector3};
+use crate::outline::Outline;
+use nalgebra::{Point2, Point3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 pub use stucco_core::{Obstacle, SurfaceId};
 use stucco_core::{SurfaceFrame, WallName};
@@ -128,12 +129,18 @@ pub struct WallOpening {
     pub sill_head_m: [f64; 2],
 }
 
-/// A rectangular room as the map knows it: what the planner plans on.
+/// A room as the map knows it: what the planner plans on.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RoomModel {
-    /// Size along x and y, m.
+    /// Size along x and y, m: the room's box, from the origin.
     pub size_m: [f64; 2],
+    /// The floor's corners, counter-clockwise in the room frame and within
+    /// its box, when the room is not the rectangle `size_m`: wall `k` runs
+    /// from corner `k` to corner `k + 1`. Empty for a rectangle, whose
+    /// walls are the room filter's four (see [`WallName`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub corners: Vec<[f64; 2]>,
     /// Height of the ceiling, m.
     pub height_m: f64,
     /// Doors and windows.
@@ -142,8 +149,8 @@ pub struct RoomModel {
     pub obstacles: Vec<Obstacle>,
 }
 
-/// A wall of a rectangular room in the plane: where its axis starts, which
-/// way it runs and its normal into the room.
+/// A wall of a room in the plane: where its axis starts, which way it
+/// runs and its normal into the room.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WallLine {
     /// The point at position 0 along the wall.
@@ -157,20 +164,39 @@ pub struct WallLine {
 }
 
 impl WallLine {
-    /// Wall `w` of a room `size_m` in size.
-    pub fn of(w: WallName, size_m: [f64; 2]) -> WallLine {
+    /// Wall `w` of a rectangular room `size_m` in size, which has four.
+    pub fn of(w: WallName, size_m: [f64; 2]) -> Option<WallLine> {
         let [xs, ys] = size_m;
         let (o, a, n, l) = match w {
-            WallName::West => ([0.0, 0.0], [0.0, 1.0], [1.0, 0.0], ys),
-            WallName::South => ([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], xs),
-            WallName::East => ([xs, 0.0], [0.0, 1.0], [-1.0, 0.0], ys),
-            WallName::North => ([0.0, ys], [1.0, 0.0], [0.0, -1.0], xs),
+            WallName::WEST => ([0.0, 0.0], [0.0, 1.0], [1.0, 0.0], ys),
+            WallName::SOUTH => ([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], xs),
+            WallName::EAST => ([xs, 0.0], [0.0, 1.0], [-1.0, 0.0], ys),
+            WallName::NORTH => ([0.0, ys], [1.0, 0.0], [0.0, -1.0], xs),
+            _ => return None,
         };
-        WallLine {
+        Some(WallLine {
             origin: Vector2::new(o[0], o[1]),
             along: Vector2::new(a[0], a[1]),
             inward: Vector2::new(n[0], n[1]),
             length_m: l,
+        })
+    }
+
+    /// The wall from corner `a` to corner `b` of a room whose corners run
+    /// counter-clockwise (the room on its left).
+    pub fn between(a: [f64; 2], b: [f64; 2]) -> WallLine {
+        let d = Vector2::new(b[0] - a[0], b[1] - a[1]);
+        let length_m = d.norm();
+        let along = if length_m > 0.0 {
+            d / length_m
+        } else {
+            Vector2::x()
+        };
+        WallLine {
+            origin: Vector2::new(a[0], a[1]),
+            along,
+            inward: Vector2::new(-along.y, along.x),
+            length_m,
         }
     }
 
@@ -196,6 +222,11 @@ pub struct Surface {
     pub frame: SurfaceFrame,
     /// Doors and windows in it.
     pub openings: Vec<Opening>,
+    /// Its edge, counter-clockwise in `(u, v)`, when it is not the
+    /// rectangle of its size (the ceiling of a room that is not a
+    /// rectangle); empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outline: Vec<[f64; 2]>,
 }
 
 impl Surface {
@@ -229,6 +260,9 @@ impl Surface {
     /// opening's margin.
     pub fn plasterable(&self, p: [f64; 2], tool: &SprayTool) -> bool {
         self.field(tool).contains(p)
+            && (self.outline.is_empty()
+                || Outline::new(&self.outline).clearance_m(&Point2::new(p[0], p[1]))
+                    >= tool.edge_margin_m)
             && !self
                 .openings
                 .iter()
@@ -252,7 +286,7 @@ impl Surface {
         match self.id {
             SurfaceId::Ceiling => Vector3::new(0.0, 0.0, -1.0),
             SurfaceId::Wall(w) => {
-                let n = WallLine::of(w, room.size_m).inward;
+                let n = room.wall(w).map_or_else(Vector2::zeros, |l| l.inward);
                 Vector3::new(n.x, n.y, 0.0)
             }
         }
@@ -260,12 +294,45 @@ impl Surface {
 }
 
 impl RoomModel {
-    /// The room's four walls and its ceiling, with their openings.
+    /// The room's walls, by index: a rectangle's four (west, south, east,
+    /// north), or its polygon's edges.
+    pub fn walls(&self) -> Vec<WallLine> {
+        if self.corners.is_empty() {
+            WallName::ALL
+                .iter()
+                .filter_map(|&w| WallLine::of(w, self.size_m))
+                .collect()
+        } else {
+            let n = self.corners.len();
+            (0..n)
+                .map(|k| WallLine::between(self.corners[k], self.corners[(k + 1) % n]))
+                .collect()
+        }
+    }
+
+    /// Wall `w`, when the room has it.
+    pub fn wall(&self, w: WallName) -> Option<WallLine> {
+        self.walls().get(w.index()).copied()
+    }
+
+    /// The floor's outline, counter-clockwise.
+    pub fn outline(&self) -> Outline {
+        if self.corners.is_empty() {
+            let [xs, ys] = self.size_m;
+            Outline::new(&[[0.0, 0.0], [xs, 0.0], [xs, ys], [0.0, ys]])
+        } else {
+            Outline::new(&self.corners)
+        }
+    }
+
+    /// The room's walls and its ceiling, with their openings.
     pub fn surfaces(&self) -> Vec<Surface> {
-        let mut out: Vec<Surface> = WallName::ALL
+        let mut out: Vec<Surface> = self
+            .walls()
             .iter()
-            .map(|&w| {
-                let line = WallLine::of(w, self.size_m);
+            .enumerate()
+            .map(|(k, line)| {
+                let w = WallName::new(k);
                 Surface {
                     id: SurfaceId::Wall(w),
                     frame: SurfaceFrame {
@@ -286,6 +353,7 @@ impl RoomModel {
                             },
                         })
                         .collect(),
+                    outline: Vec::new(),
                 }
             })
             .collect();
@@ -298,6 +366,7 @@ impl RoomModel {
                 size_m: self.size_m,
             },
             openings: Vec::new(),
+            outline: self.corners.clone(),
         });
         out
     }
@@ -313,12 +382,13 @@ mod tests {
             size_m: [5.0, 3.0],
             height_m: 2.6,
             openings: vec![WallOpening {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 kind: OpeningKind::Window,
                 along_m: [1.0, 2.2],
                 sill_head_m: [0.9, 2.1],
             }],
             obstacles: Vec::new(),
+            corners: Vec::new(),
         }
     }
 
@@ -327,7 +397,7 @@ mod tests {
         let r = room();
         let s = r.surfaces();
         let south = &s[1];
-        assert_eq!(south.id, SurfaceId::Wall(WallName::South));
+        assert_eq!(south.id, SurfaceId::Wall(WallName::SOUTH));
         // u along x, at y = 0; the nozzle stands north of it.
         let p = south.nozzle_point([2.0, 1.0], 0.3, &r);
         assert!((p - Point3::new(2.0, 0.3, 1.0)).norm() < 1e-12);
@@ -338,7 +408,7 @@ mod tests {
         let p = ceiling.nozzle_point([1.0, 2.0], 0.3, &r);
         assert!((p - Point3::new(1.0, 2.0, 2.3)).norm() < 1e-12);
         for w in WallName::ALL {
-            let line = WallLine::of(w, r.size_m);
+            let line = r.wall(w).expect("a rectangle's wall");
             let h = line.heading_wall_left();
             let left = Vector2::new(-h.sin(), h.cos());
             assert!((left + line.inward).norm() < 1e-12, "{w:?}");

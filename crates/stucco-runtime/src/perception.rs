@@ -8,7 +8,9 @@
 use crate::EchoMemory;
 use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_core::{EncoderSample, Pose2, Readings, RobotSpec, Stamp, TOOL_CAMERA, Twist2};
-use stucco_mission::{DoorEstimate, Estimate, FloorPlan, WallGeometry, WallName, WindowEstimate};
+use stucco_mission::{
+    DoorEstimate, Estimate, FloorPlan, WallGeometry, WallName, WindowEstimate, rectangle_walls,
+};
 use stucco_nav::{
     DoorConfig, DoorOpening, OdometryConfig, ProfilePose, RoomConfig, RoomCovariance, RoomEkf,
     RoomEkfConfig, RoomSearch, RoomState, ScanPoints, Wall, Window, WindowConfig, WindowFinder,
@@ -557,7 +559,9 @@ impl Perception {
             .room
             .door_estimate(door)
             .unwrap_or((side.along_m, sigma * sigma));
-        let inside = WallGeometry::of(side.wall, size).distance(&pose.position().coords);
+        let inside = WallGeometry::of(side.wall, size)
+            .ok_or_else(|| format!("the plan's door {door} is in no wall of {}", name(room)))?
+            .distance(&pose.position().coords);
         if inside >= 0.0 {
             return Err(format!(
                 "the robot is {inside:.2} m inside {} from its door {door}: not beyond it",
@@ -758,8 +762,7 @@ impl Perception {
         let h = nalgebra::Vector2::new(a.cos(), a.sin());
         let [x, y, cam_height_m] = profile.origin_m;
         let p = est.pose.transform_point(&Point2::new(x, y)).coords;
-        let target = WallName::ALL.iter().find_map(|&w| {
-            let g = WallGeometry::of(w, est.room_m);
+        let target = rectangle_walls(est.room_m).find_map(|(w, g)| {
             let toward = -h.dot(&g.inward);
             (toward >= CAMERA_INCIDENCE_COS).then(|| {
                 (
@@ -896,7 +899,10 @@ impl Perception {
         let Some(name) = WallName::from_index(wall) else {
             return;
         };
-        let toward = -WallGeometry::of(name, est.room_m).inward;
+        let Some(g) = WallGeometry::of(name, est.room_m) else {
+            return;
+        };
+        let toward = -g.inward;
         let gamma_r = stucco_core::wrap_angle(toward.y.atan2(toward.x) - est.pose.theta);
         let m = self.mount;
         let d_l = d - (m.x * gamma_r.cos() + m.y * gamma_r.sin());
@@ -927,10 +933,8 @@ impl Perception {
         for o in openings {
             let c = laser.transform_point(&o.center).coords;
             // The wall it lies in, within 15 cm.
-            let Some((wall, g)) = WallName::ALL
-                .iter()
-                .map(|&w| (w, WallGeometry::of(w, est.room_m)))
-                .find(|(_, g)| g.distance(&c).abs() < 0.15)
+            let Some((wall, g)) =
+                rectangle_walls(est.room_m).find(|(_, g)| g.distance(&c).abs() < 0.15)
             else {
                 continue;
             };

@@ -242,7 +242,7 @@ mod tests {
             },
             EventKind::WindowEdgeLook {
                 task: 3,
-                wall: WallName::North,
+                wall: WallName::NORTH,
                 along_m: 1.25,
                 sigma_m: 0.031,
             },

@@ -45,6 +45,15 @@ pub enum TaskFailure {
         /// Doors found.
         found: usize,
     },
+    /// A wall the room does not have, by its index.
+    UnknownWall {
+        /// The task.
+        task: String,
+        /// The wall.
+        wall: WallName,
+        /// How many walls the room has.
+        walls: usize,
+    },
     /// `go_to_room` with no floor plan in the mission.
     NoFloorPlan,
     /// `go_to_room` to a room the plan does not have.
@@ -168,6 +177,7 @@ impl TaskFailure {
             TaskFailure::RoomTooSmallToTurn => "room_too_small_to_turn",
             TaskFailure::PassStartsAtCorner { .. } => "pass_starts_at_corner",
             TaskFailure::UnknownDoor { .. } => "unknown_door",
+            TaskFailure::UnknownWall { .. } => "unknown_wall",
             TaskFailure::NoFloorPlan => "no_floor_plan",
             TaskFailure::UnknownRoom { .. } => "unknown_room",
             TaskFailure::RoomNotKnown => "room_not_known",
@@ -221,6 +231,11 @@ impl std::fmt::Display for TaskFailure {
             TaskFailure::UnknownDoor { task, door, found } => {
                 write!(f, "{task}: door {door} is not known ({found} doors found)")
             }
+            TaskFailure::UnknownWall { task, wall, walls } => write!(
+                f,
+                "{task}: the room has no {wall} (its walls are 0 to {})",
+                walls.saturating_sub(1)
+            ),
             TaskFailure::NoFloorPlan => write!(
                 f,
                 "go_to_room: the mission has no floor plan ([[room]], [[door]])"

@@ -226,7 +226,7 @@ mod tests {
                 goal: Pose2::new(1.0, 2.0, 0.5),
             }),
             Some(BehaviourKind::FollowWall {
-                wall: WallName::South,
+                wall: WallName::SOUTH,
                 standoff_m: 0.6,
                 to_m: 3.0,
             }),

@@ -7,7 +7,6 @@ use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, 
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::{EventKind, ExecutiveConfig};
 use crate::model::{DoorEstimate, Estimate, WallGeometry};
-use crate::task::WallName;
 use std::collections::VecDeque;
 use stucco_core::{DriveCommand, Pose2, wrap_angle};
 
@@ -322,7 +321,9 @@ fn door_pass(
 ) -> Vec<Behaviour> {
     let v = &config.vehicle;
     let (rear, front) = (v.rear_overhang_m, v.front_m());
-    let g = WallGeometry::of(d.wall, est.room_m);
+    let Some(g) = WallGeometry::of(d.wall, est.room_m) else {
+        return Vec::new();
+    };
     let depth = if g.along.x.abs() > 0.5 {
         est.room_m[1]
     } else {
@@ -434,8 +435,10 @@ fn next_room_depth(config: &ExecutiveConfig, est: &Estimate, door: usize) -> Opt
     let next = floor.beyond(door, est.room?)?;
     let side = floor.side(door, next)?;
     let size = floor.rooms().get(next)?.size_m;
-    Some(match side.wall {
-        WallName::South | WallName::North => size[1],
-        WallName::East | WallName::West => size[0],
+    let g = WallGeometry::of(side.wall, size)?;
+    Some(if g.along.x.abs() > 0.5 {
+        size[1]
+    } else {
+        size[0]
     })
 }

@@ -40,18 +40,19 @@ pub(crate) fn out_of_reach(
     config: &ExecutiveConfig,
 ) -> Option<String> {
     use crate::model::WallGeometry;
-    let length = |w| WallGeometry::of(w, est.room_m).length_m;
-    let along = |key: &str, w, at: f64| {
-        let l = length(w);
-        (!(0.0..=l).contains(&at)).then(|| {
-            format!("{key}: {at:.2} m is not on the {w:?} wall (0 to {l:.2} m)").to_lowercase()
-        })
+    let along = |key: &str, w, at: f64| match WallGeometry::of(w, est.room_m) {
+        None => Some(format!(
+            "wall: the room has no {w} (its walls are 0 to {})",
+            stucco_core::WallName::ALL.len() - 1
+        )),
+        Some(g) => (!(0.0..=g.length_m).contains(&at))
+            .then(|| format!("{key}: {at:.2} m is not on {w} (0 to {:.2} m)", g.length_m)),
     };
     let standoff = |w, s: f64| {
         // The room across the wall, less the body's half width.
-        let across = match w {
-            stucco_core::WallName::West | stucco_core::WallName::East => est.room_m[0],
-            _ => est.room_m[1],
+        let across = match WallGeometry::of(w, est.room_m) {
+            Some(g) if g.along.x.abs() > 0.5 => est.room_m[1],
+            _ => est.room_m[0],
         };
         (s > across - 0.5 * config.vehicle.width_m)
             .then(|| format!("standoff_m: {s:.2} m reaches past a {across:.2} m room"))
@@ -93,6 +94,15 @@ pub(crate) fn out_of_reach(
             at_m,
             ..
         } => along("at_m", *wall, *at_m).or_else(|| standoff(*wall, *standoff_m)),
+        TaskSpec::Plaster { walls, .. } => walls
+            .iter()
+            .find(|&&w| WallGeometry::of(w, est.room_m).is_none())
+            .map(|w| {
+                format!(
+                    "walls: the room has no {w} (its walls are 0 to {})",
+                    stucco_core::WallName::ALL.len() - 1
+                )
+            }),
         _ => None,
     }
 }

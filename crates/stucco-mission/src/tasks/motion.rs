@@ -4,7 +4,7 @@
 use super::ways::way;
 use super::{Behaviours, Task, TaskCx, TaskFailure, TaskStep, Thaw, drive_through};
 use crate::behaviour::BehaviourKind;
-use crate::model::{Estimate, WallGeometry};
+use crate::model::{Estimate, wall_in};
 use crate::task::Landmark;
 use stucco_core::Pose2;
 
@@ -70,7 +70,7 @@ pub(crate) fn goal(
 /// inside, its origin at its middle on the wall's line, x out of the room.
 fn landmark_frame(landmark: &Landmark, est: &Estimate) -> Result<Pose2, TaskFailure> {
     let (wall, along) = match *landmark {
-        Landmark::Wall(w) => (w, WallGeometry::of(w, est.room_m).length_m / 2.0),
+        Landmark::Wall(w) => (w, wall_in(est, w, "move_relative")?.length_m / 2.0),
         Landmark::Door(i) => {
             let d = est.doors.get(i).ok_or_else(|| TaskFailure::UnknownDoor {
                 task: "move_relative".to_owned(),
@@ -80,7 +80,7 @@ fn landmark_frame(landmark: &Landmark, est: &Estimate) -> Result<Pose2, TaskFail
             (d.wall, d.position_m)
         }
     };
-    let g = WallGeometry::of(wall, est.room_m);
+    let g = wall_in(est, wall, "move_relative")?;
     let o = g.point(along, 0.0);
     Ok(Pose2::new(o.x, o.y, (-g.inward.y).atan2(-g.inward.x)))
 }

@@ -666,7 +666,9 @@ fn edge_looks(
         .iter()
         .filter(|w| w.sill_head_m[0] > DOOR_SILL_M)
     {
-        let g = WallGeometry::of(w.wall, est.room_m);
+        let Some(g) = WallGeometry::of(w.wall, est.room_m) else {
+            continue;
+        };
         for k in 0..2 {
             let sigma = w.along_sigma_m[k];
             if sigma <= LOOK_EDGE_SIGMA_M {
@@ -802,7 +804,7 @@ fn plan_room(
     // A region of one wall: the rest of that wall is kept out of the plan
     // as openings are (its edges get the tool's margin).
     if let (Some(r), [wall]) = (region, walls) {
-        let length = WallGeometry::of(*wall, est.room_m).length_m;
+        let length = WallGeometry::of(*wall, est.room_m).map_or(0.0, |g| g.length_m);
         let (a, z, h) = (r.along_m, r.height_m, est.height_m);
         let keep_out = [
             ([0.0, a[0]], [0.0, h]),
@@ -824,6 +826,7 @@ fn plan_room(
     }
     let room = RoomModel {
         size_m: est.room_m,
+        corners: Vec::new(),
         height_m: est.height_m,
         openings,
         obstacles: est.obstacles.clone(),

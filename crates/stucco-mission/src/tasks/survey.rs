@@ -91,8 +91,8 @@ impl Task for MapRoom {
         // A side of the room is measured when both its walls are.
         let listed = |a: WallName, b: WallName| walls.contains(&a) && walls.contains(&b);
         let sides = [
-            listed(WallName::West, WallName::East),
-            listed(WallName::South, WallName::North),
+            listed(WallName::WEST, WallName::EAST),
+            listed(WallName::SOUTH, WallName::NORTH),
         ];
         let loose: Vec<f64> = (0..2)
             .filter(|&i| sides[i] && est.room_sigma_m[i] > max_size_sigma_m)

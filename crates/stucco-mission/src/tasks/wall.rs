@@ -6,7 +6,7 @@ use super::{
 };
 use crate::behaviour::{Behaviour, BehaviourKind};
 use crate::executive::ExecutiveConfig;
-use crate::model::{Estimate, WallGeometry, pose_at_wall};
+use crate::model::{Estimate, wall_in};
 use crate::task::{Side, WallName};
 use stucco_core::Pose2;
 
@@ -43,7 +43,8 @@ impl Task for AlignToWall {
         let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
         let gains = &config.gains;
         let clearance = pivot_clearance(config);
-        let goal = pose_at_wall(self.wall, est.room_m, self.at_m, self.standoff_m, self.side);
+        let g = wall_in(est, self.wall, "align_to_wall")?;
+        let goal = g.pose_at(self.at_m, self.standoff_m, self.side);
         let queue = &mut self.ways.queue;
         queue.extend(
             approach(
@@ -57,7 +58,6 @@ impl Task for AlignToWall {
             )?
             .0,
         );
-        let g = WallGeometry::of(self.wall, est.room_m);
         let forward = g
             .along
             .dot(&nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin()))
@@ -124,7 +124,7 @@ impl Task for FollowWall {
             self.speed_mps,
         );
         let queue = &mut self.ways.queue;
-        let g = WallGeometry::of(wall, est.room_m);
+        let g = wall_in(est, wall, "follow_wall")?;
         let forward = to_m > from_m;
         let front = config.vehicle.front_m();
         let room_left = if forward { g.length_m - to_m } else { to_m };
@@ -135,7 +135,7 @@ impl Task for FollowWall {
             });
         }
         let side = g.side_for(forward);
-        let start = pose_at_wall(wall, est.room_m, from_m, standoff_m, side);
+        let start = g.pose_at(from_m, standoff_m, side);
         let (way, turn_at) = approach(config, &pose, &start, wall, est, clearance, speed_mps)?;
         queue.extend(way);
         queue.push_back(Behaviour::follow_wall(
@@ -146,7 +146,6 @@ impl Task for FollowWall {
         // forward out to a lane as far from the wall as that turn
         // point (the front leads away from the wall; backing out of
         // the line would swing it into the wall).
-        let g = WallGeometry::of(wall, est.room_m);
         let dir = if forward { 1.0 } else { -1.0 };
         let turned_at = g.position(&turn_at.position().coords);
         let back = g.point(turned_at, standoff_m);
@@ -190,7 +189,7 @@ pub(crate) fn approach(
     clearance: f64,
     speed_mps: f64,
 ) -> Result<(Vec<Behaviour>, Pose2), TaskFailure> {
-    let g = WallGeometry::of(wall, est.room_m);
+    let g = wall_in(est, wall, "approach")?;
     let gp = goal.position().coords;
     let dir = nalgebra::Vector2::new(goal.theta.cos(), goal.theta.sin());
     let forward = g.along.dot(&dir) > 0.0;
