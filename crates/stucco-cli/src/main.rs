@@ -967,7 +967,7 @@ fn print_run(r: &MissionReport) {
     }
     for p in &r.passes {
         println!(
-            "  pass along the {:?} wall (task {}): standoff {:.2} m held to {:.1} mm RMS (max {:.1}, mean {:+.1})",
+            "  pass along {} (task {}): standoff {:.2} m held to {:.1} mm RMS (max {:.1}, mean {:+.1})",
             p.wall,
             p.task,
             p.standoff_m,
@@ -978,7 +978,7 @@ fn print_run(r: &MissionReport) {
     }
     for w in &r.windows {
         println!(
-            "  window in the {:?} wall from {:.3} to {:.3} m, sill {:.3} m, head {:.3} m ({} passes){}",
+            "  window in {} from {:.3} to {:.3} m, sill {:.3} m, head {:.3} m ({} passes){}",
             w.wall,
             w.along_m[0],
             w.along_m[1],
@@ -998,7 +998,7 @@ fn print_run(r: &MissionReport) {
     }
     for d in &r.doors {
         println!(
-            "  door in the {:?} wall at {:.3} m{}: {:.1} cm from the true door",
+            "  door in {} at {:.3} m{}: {:.1} cm from the true door",
             d.wall,
             d.position_m,
             d.width_m
