@@ -73,7 +73,8 @@ fn rectangle_of(corners: &[[f64; 2]]) -> Result<([f64; 2], [f64; 2]), String> {
     let not_a_rectangle = || {
         format!(
             "a room of {n} corners that is not a rectangle along the drawing's axes: the \
-             robot's room filter and planner keep such rectangles only, for now"
+             planner plans on any shape, but the robot's room filter and its ways keep such \
+             rectangles only, for now"
         )
     };
     if n != 4 {
