@@ -140,6 +140,9 @@ struct Errors {
     lost: usize,
     pos: Vec<f64>,
     head: Vec<f64>,
+    /// Worst error of the robot's distance to a wall on the box's lines,
+    /// against the walls as built (frame-free: what plastering needs).
+    walls: Vec<f64>,
 }
 
 impl Errors {
@@ -157,14 +160,18 @@ impl Errors {
     fn line(&mut self) -> String {
         self.pos.sort_by(f64::total_cmp);
         self.head.sort_by(f64::total_cmp);
+        self.walls.sort_by(f64::total_cmp);
         let q = |v: &[f64], f: f64| v[((v.len() - 1) as f64 * f) as usize];
         format!(
-            "median {:.1} mm, 95 % {:.1} mm, heading median {:.2}°, lost {} of {}",
+            "median {:.1} mm, 95 % {:.1} mm, heading median {:.2}°, lost {} of {}; \
+             to the walls as built: median {:.1} mm, 95 % {:.1} mm",
             q(&self.pos, 0.5) * 1e3,
             q(&self.pos, 0.95) * 1e3,
             q(&self.head, 0.5).to_degrees(),
             self.lost,
-            self.runs
+            self.runs,
+            q(&self.walls, 0.5) * 1e3,
+            q(&self.walls, 0.95) * 1e3,
         )
     }
 }
@@ -221,12 +228,13 @@ fn study(drawing_off_m: f64) {
                 )),
                 Stamp::ZERO,
             );
+            let drawing = drawn_map(&drawn, sigma);
             let mut map = WallMapEkf::in_map(
                 WallMapConfig {
                     laser_mount: mount,
                     ..WallMapConfig::default()
                 },
-                &drawn_map(&drawn, sigma),
+                &drawing,
                 start,
                 Matrix3::from_diagonal(&nalgebra::Vector3::new(
                     0.05f64.powi(2),
@@ -247,8 +255,51 @@ fn study(drawing_off_m: f64) {
                 map.scan(&walls);
             }
             let (x, _): (DVector<f64>, _) = room.now();
-            boxed.add(&Pose2::new(x[0], x[1], x[2]), &pose);
+            let est = Pose2::new(x[0], x[1], x[2]);
+            boxed.add(&est, &pose);
             mapped.add(&map.pose(), &pose);
+            // The robot's distance to each wall on the box's lines: as
+            // built, and as each filter has it.
+            let (mut worst_box, mut worst_map) = (0.0f64, 0.0f64);
+            let n = drawn.len();
+            for k in 0..n {
+                let (a, b) = (drawn[k], drawn[(k + 1) % n]);
+                let side = if a[0] == 0.0 && b[0] == 0.0 {
+                    Some(0)
+                } else if a[1] == 0.0 && b[1] == 0.0 {
+                    Some(1)
+                } else if a[0] == size[0] && b[0] == size[0] {
+                    Some(2)
+                } else if a[1] == size[1] && b[1] == size[1] {
+                    Some(3)
+                } else {
+                    None
+                };
+                let Some(side) = side else { continue };
+                let (ta, tb) = (Point2::from(truth[k]), Point2::from(truth[(k + 1) % n]));
+                let d = (tb - ta).normalize();
+                let inward = Vector2::new(-d.y, d.x);
+                let built = inward.dot(&(pose.position() - ta));
+                let boxed_d = [x[0], x[1], x[3] - x[0], x[4] - x[1]][side];
+                // The map wall along the drawn one (walls in one line,
+                // either side of a chimney breast, are merged into one).
+                let drawn_w = &drawing.walls[k];
+                let w = map
+                    .walls()
+                    .iter()
+                    .filter(|w| wrap_angle(w.alpha_rad - drawn_w.alpha_rad).abs() < 0.1)
+                    .min_by(|p, q| {
+                        (p.rho_m - drawn_w.rho_m)
+                            .abs()
+                            .total_cmp(&(q.rho_m - drawn_w.rho_m).abs())
+                    })
+                    .unwrap();
+                let mapped_d = w.rho_m - w.normal().dot(&map.pose().position().coords);
+                worst_box = worst_box.max((boxed_d - built).abs());
+                worst_map = worst_map.max((mapped_d - built).abs());
+            }
+            boxed.walls.push(worst_box);
+            mapped.walls.push(worst_map);
         }
         eprintln!(
             "{name:>15}, drawing off by up to {:.0} cm | room filter on its box: {} | wall-map \
