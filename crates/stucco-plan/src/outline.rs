@@ -38,6 +38,39 @@ impl Outline {
             / 2.0
     }
 
+    /// Why the corners make no room, if they do not: fewer than three, a
+    /// number that is not finite, two walls that cross, or corners running
+    /// clockwise or enclosing nothing.
+    pub fn fault(&self) -> Option<String> {
+        let n = self.corners.len();
+        if n < 3 {
+            return Some(format!("{n} corners: a room has three or more"));
+        }
+        if self
+            .corners
+            .iter()
+            .any(|c| !(c.x.is_finite() && c.y.is_finite()))
+        {
+            return Some("a corner is not a finite number".into());
+        }
+        let edges: Vec<_> = self.edges().collect();
+        for i in 0..n {
+            for j in i + 2..n {
+                if i == 0 && j == n - 1 {
+                    continue;
+                }
+                let ((a, b), (c, d)) = (edges[i], edges[j]);
+                if segments_touch(&a, &b, &c, &d) {
+                    return Some(format!("walls {i} and {j} cross or touch"));
+                }
+            }
+        }
+        if self.signed_area_m2() <= 0.0 {
+            return Some("the corners must run counter-clockwise and enclose an area".into());
+        }
+        None
+    }
+
     /// True when `p` lies inside (the even-odd rule; a point on an edge
     /// may fall either way).
     pub fn contains(&self, p: &Point2<f64>) -> bool {
@@ -116,6 +149,34 @@ fn segments_meet(a: &Point2<f64>, b: &Point2<f64>, c: &Point2<f64>, d: &Point2<f
     let (d1, d2) = (cross(c, d, a), cross(c, d, b));
     let (d3, d4) = (cross(a, b, c), cross(a, b, d));
     d1 * d2 <= 0.0 && d3 * d4 <= 0.0
+}
+
+/// True when the segments `a`–`b` and `c`–`d` share a point: they cross,
+/// or an end of one lies on the other (collinear segments apart do not).
+fn segments_touch(a: &Point2<f64>, b: &Point2<f64>, c: &Point2<f64>, d: &Point2<f64>) -> bool {
+    const EPS: f64 = 1e-12;
+    let cross = |o: &Point2<f64>, p: &Point2<f64>, q: &Point2<f64>| {
+        let (u, v): (Vector2<f64>, Vector2<f64>) = (p - o, q - o);
+        u.x * v.y - u.y * v.x
+    };
+    // `q`, on the line through `p`–`r`, lies between them.
+    let on = |p: &Point2<f64>, q: &Point2<f64>, r: &Point2<f64>| {
+        q.x >= p.x.min(r.x) - EPS
+            && q.x <= p.x.max(r.x) + EPS
+            && q.y >= p.y.min(r.y) - EPS
+            && q.y <= p.y.max(r.y) + EPS
+    };
+    let (d1, d2) = (cross(c, d, a), cross(c, d, b));
+    let (d3, d4) = (cross(a, b, c), cross(a, b, d));
+    if ((d1 > EPS && d2 < -EPS) || (d1 < -EPS && d2 > EPS))
+        && ((d3 > EPS && d4 < -EPS) || (d3 < -EPS && d4 > EPS))
+    {
+        return true;
+    }
+    (d1.abs() <= EPS && on(c, a, d))
+        || (d2.abs() <= EPS && on(c, b, d))
+        || (d3.abs() <= EPS && on(a, c, b))
+        || (d4.abs() <= EPS && on(a, d, b))
 }
 
 /// Distance from the convex polygon `body` (its outline) to the segment
@@ -259,6 +320,48 @@ mod tests {
         // A rectangle's rows at the inset are kept whole.
         let r = Outline::new(&[[0.0, 0.0], [5.0, 0.0], [5.0, 3.0], [0.0, 3.0]]);
         assert!(close(&r.row_spans(0.1, 0.1), &[[0.1, 4.9]]));
+    }
+
+    #[test]
+    fn corners_that_make_no_room_say_why() {
+        assert_eq!(l_room().fault(), None);
+        let mut cw: Vec<[f64; 2]> = l_room().corners().iter().map(|c| [c.x, c.y]).collect();
+        cw.reverse();
+        let e = Outline::new(&cw).fault().unwrap_or_default();
+        assert!(e.contains("counter-clockwise"), "{e}");
+        // A bow tie: its walls 1 and 3 cross.
+        let e = Outline::new(&[[0.0, 0.0], [4.0, 0.0], [0.0, 3.0], [4.0, 3.0]])
+            .fault()
+            .unwrap_or_default();
+        assert!(e.contains("walls 1 and 3 cross"), "bow tie: {e}");
+        // A chimney breast's two walls in one line, apart, are no fault;
+        // a pinch, two walls meeting at a point, is.
+        let breast = [
+            [0.0, 0.0],
+            [4.5, 0.0],
+            [4.5, 4.0],
+            [2.8, 4.0],
+            [2.8, 3.5],
+            [1.6, 3.5],
+            [1.6, 4.0],
+            [0.0, 4.0],
+        ];
+        assert_eq!(Outline::new(&breast).fault(), None);
+        let pinch = [
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 2.0],
+            [4.0, 2.0],
+            [4.0, 4.0],
+            [2.0, 2.0],
+            [0.0, 2.0],
+        ];
+        let e = Outline::new(&pinch).fault().unwrap_or_default();
+        assert!(e.contains("touch"), "pinch: {e}");
+        let e = Outline::new(&[[0.0, 0.0], [1.0, 0.0]])
+            .fault()
+            .unwrap_or_default();
+        assert!(e.contains("three"), "{e}");
     }
 
     #[test]

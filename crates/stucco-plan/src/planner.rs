@@ -483,6 +483,9 @@ pub fn plan(
 ) -> Result<Plan, PlanError> {
     tool.validate(vehicle.width_m)?;
     let outline = room.outline();
+    if let Some(fault) = outline.fault() {
+        return Err(PlanError::Room(format!("the room's corners: {fault}")));
+    }
     if !(room.size_m[0] > 0.0
         && room.size_m[1] > 0.0
         && room.height_m > 0.0
