@@ -545,12 +545,7 @@ fn parse_region(s: &str) -> Result<stucco_core::Region, String> {
 }
 
 fn parse_wall(s: &str) -> Result<WallName, String> {
-    match s.parse::<usize>() {
-        Ok(i) if i <= usize::from(u16::MAX) => Ok(WallName::new(i)),
-        _ => WallName::compass(s).ok_or_else(|| {
-            format!("{s}: a wall's index (0, 1, ...) or, in a rectangular room, west, south, east or north")
-        }),
-    }
+    s.parse()
 }
 
 /// `stucco bench`.

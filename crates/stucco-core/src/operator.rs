@@ -80,6 +80,23 @@ impl std::fmt::Display for WallName {
     }
 }
 
+/// `"1"` or, in a rectangular room, `"south"`.
+impl std::str::FromStr for WallName {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<WallName, String> {
+        match s.parse::<u16>() {
+            Ok(i) => Ok(WallName(i)),
+            Err(_) => WallName::compass(s).ok_or_else(|| {
+                format!(
+                    "{s}: a wall's index (0, 1, ...) or, in a rectangular room, west, south, \
+                     east or north"
+                )
+            }),
+        }
+    }
+}
+
 impl Serialize for WallName {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_u16(self.0)

@@ -57,19 +57,10 @@ const CORNER_SLACK_M: f64 = 0.05;
 /// The rectangle `corners` draw, as `(origin, size)`, or why they are not
 /// one the robot can keep.
 fn rectangle_of(corners: &[[f64; 2]]) -> Result<([f64; 2], [f64; 2]), String> {
-    if corners.len() < 3 || corners.iter().flatten().any(|v| !v.is_finite()) {
-        return Err("three or more corners, each two numbers".into());
+    if let Some(fault) = stucco_plan::Outline::new(corners).fault() {
+        return Err(fault);
     }
     let n = corners.len();
-    let twice_area: f64 = (0..n)
-        .map(|i| {
-            let (a, b) = (corners[i], corners[(i + 1) % n]);
-            a[0] * b[1] - b[0] * a[1]
-        })
-        .sum();
-    if twice_area <= 0.0 {
-        return Err("the corners must run counter-clockwise and enclose an area".into());
-    }
     let not_a_rectangle = || {
         format!(
             "a room of {n} corners that is not a rectangle along the drawing's axes: the \

@@ -85,18 +85,7 @@ fn world(corners: &[[f64; 2]]) -> World {
 
 /// Distance from `p` to the nearest wall, negative outside.
 fn clearance(corners: &[[f64; 2]], p: &Point2<f64>) -> f64 {
-    let n = corners.len();
-    let (mut inside, mut d) = (false, f64::INFINITY);
-    for k in 0..n {
-        let (a, b) = (Point2::from(corners[k]), Point2::from(corners[(k + 1) % n]));
-        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-            inside = !inside;
-        }
-        let ab = b - a;
-        let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
-        d = d.min((p - (a + ab * t)).norm());
-    }
-    if inside { d } else { -d }
+    stucco_plan::Outline::new(corners).clearance_m(p)
 }
 
 /// The drawing's walls as a map: each edge's line, the free side inside.

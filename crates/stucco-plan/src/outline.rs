@@ -4,30 +4,41 @@
 //! across the room run inside it, and does a body fit.
 
 use nalgebra::{Point2, Vector2};
+use std::borrow::Cow;
 
-/// A simple polygon, its corners counter-clockwise, m.
+/// A simple polygon, its corners counter-clockwise, m. It borrows the
+/// corners it is made of: asking a ceiling's outline whether a cell is
+/// plastered, cell after cell, copies nothing.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Outline {
-    corners: Vec<Point2<f64>>,
+pub struct Outline<'a> {
+    corners: Cow<'a, [[f64; 2]]>,
 }
 
-impl Outline {
+impl<'a> Outline<'a> {
     /// The polygon of `corners` (counter-clockwise).
-    pub fn new(corners: &[[f64; 2]]) -> Outline {
+    pub fn new(corners: &'a [[f64; 2]]) -> Outline<'a> {
         Outline {
-            corners: corners.iter().map(|c| Point2::new(c[0], c[1])).collect(),
+            corners: Cow::Borrowed(corners),
+        }
+    }
+
+    /// The polygon of `corners`, kept.
+    pub fn owned(corners: Vec<[f64; 2]>) -> Outline<'static> {
+        Outline {
+            corners: Cow::Owned(corners),
         }
     }
 
     /// Its corners.
-    pub fn corners(&self) -> &[Point2<f64>] {
+    pub fn corners(&self) -> &[[f64; 2]] {
         &self.corners
     }
 
     /// Its edges, wall by wall.
     pub fn edges(&self) -> impl Iterator<Item = (Point2<f64>, Point2<f64>)> + '_ {
         let n = self.corners.len();
-        (0..n).map(move |k| (self.corners[k], self.corners[(k + 1) % n]))
+        let at = move |k: usize| Point2::from(self.corners[k % n]);
+        (0..n).map(move |k| (at(k), at(k + 1)))
     }
 
     /// Twice its signed area: positive when counter-clockwise.
@@ -49,7 +60,7 @@ impl Outline {
         if self
             .corners
             .iter()
-            .any(|c| !(c.x.is_finite() && c.y.is_finite()))
+            .any(|c| !(c[0].is_finite() && c[1].is_finite()))
         {
             return Some("a corner is not a finite number".into());
         }
@@ -252,7 +263,7 @@ fn capsule_row(a: &Point2<f64>, b: &Point2<f64>, r: f64, y: f64) -> Option<[f64;
 }
 
 /// Removes the open stretch `cut` from `spans`.
-fn cut_spans(spans: &mut Vec<[f64; 2]>, cut: [f64; 2]) {
+pub(crate) fn cut_spans(spans: &mut Vec<[f64; 2]>, cut: [f64; 2]) {
     let mut out = Vec::with_capacity(spans.len() + 1);
     for s in spans.drain(..) {
         if cut[1] <= s[0] || cut[0] >= s[1] {
@@ -275,7 +286,7 @@ mod tests {
     use super::*;
 
     /// An L: 4 × 3 less its north-east 2 × 1.5.
-    fn l_room() -> Outline {
+    fn l_room() -> Outline<'static> {
         Outline::new(&[
             [0.0, 0.0],
             [4.0, 0.0],
@@ -325,7 +336,7 @@ mod tests {
     #[test]
     fn corners_that_make_no_room_say_why() {
         assert_eq!(l_room().fault(), None);
-        let mut cw: Vec<[f64; 2]> = l_room().corners().iter().map(|c| [c.x, c.y]).collect();
+        let mut cw: Vec<[f64; 2]> = l_room().corners().to_vec();
         cw.reverse();
         let e = Outline::new(&cw).fault().unwrap_or_default();
         assert!(e.contains("counter-clockwise"), "{e}");

@@ -23,7 +23,7 @@
 //! sofa, under a radiator, too high for the lift) is not planned and is
 //! reported with its area.
 
-use crate::outline::Outline;
+use crate::outline::{Outline, cut_spans};
 use crate::surface::{Opening, OpeningKind, RoomModel, Surface, SurfaceId, WallOpening};
 use crate::{PlanError, Rect, SprayTool};
 use serde::{Deserialize, Serialize};
@@ -664,7 +664,7 @@ fn room_box(pose: &Pose2, x: [f64; 2], y: [f64; 2]) -> [[f64; 2]; 2] {
 struct Planner<'a> {
     room: &'a RoomModel,
     /// The room's floor.
-    outline: Outline,
+    outline: Outline<'a>,
     tool: &'a SprayTool,
     body: Body,
     floor: Floor,
@@ -959,12 +959,12 @@ impl Planner<'_> {
                 let mut pieces = vec![lift];
                 for o in &surface.openings {
                     if u > o.rect.u_m[0] - beside + 1e-9 && u < o.rect.u_m[1] + beside - 1e-9 {
-                        cut(&mut pieces, [o.rect.v_m[0] - so, o.rect.v_m[1] + so]);
+                        cut_spans(&mut pieces, [o.rect.v_m[0] - so, o.rect.v_m[1] + so]);
                     }
                 }
                 for (bu, top) in low_blocks {
                     if u >= bu[0] && u <= bu[1] {
-                        cut(&mut pieces, [f64::MIN, *top]);
+                        cut_spans(&mut pieces, [f64::MIN, *top]);
                     }
                 }
                 if !pieces.is_empty() {
@@ -1025,7 +1025,7 @@ impl Planner<'_> {
             .iter()
             .filter(|q| y >= q.v_m[0] - 1e-9 && y <= q.v_m[1] + 1e-9)
         {
-            cut(&mut open, q.u_m);
+            cut_spans(&mut open, q.u_m);
         }
         open.retain(|o| o[1] - o[0] > 1e-3);
         open
@@ -1138,7 +1138,7 @@ impl Planner<'_> {
                     })
                     .collect();
                 for t in &taken {
-                    cut(&mut free, *t);
+                    cut_spans(&mut free, *t);
                 }
                 if free.is_empty() {
                     continue;
@@ -1219,25 +1219,6 @@ fn boustrophedon(lines: &[Line], axis_speed_mps: f64, forward_first: bool) -> Ve
         }
     }
     moves
-}
-
-/// Removes `hole` from the sorted, disjoint intervals `spans`.
-fn cut(spans: &mut Vec<[f64; 2]>, hole: [f64; 2]) {
-    let mut out = Vec::with_capacity(spans.len() + 1);
-    for s in spans.iter() {
-        if hole[1] <= s[0] || hole[0] >= s[1] {
-            out.push(*s);
-            continue;
-        }
-        if hole[0] > s[0] {
-            out.push([s[0], hole[0]]);
-        }
-        if hole[1] < s[1] {
-            out.push([hole[1], s[1]]);
-        }
-    }
-    out.retain(|s| s[1] - s[0] > 1e-9);
-    *spans = out;
 }
 
 /// Lanes in the order of a greedy tour from `start`: always the lane whose

@@ -316,10 +316,10 @@ impl RoomModel {
     }
 
     /// The floor's outline, counter-clockwise.
-    pub fn outline(&self) -> Outline {
+    pub fn outline(&self) -> Outline<'_> {
         if self.corners.is_empty() {
             let [xs, ys] = self.size_m;
-            Outline::new(&[[0.0, 0.0], [xs, 0.0], [xs, ys], [0.0, ys]])
+            Outline::owned(vec![[0.0, 0.0], [xs, 0.0], [xs, ys], [0.0, ys]])
         } else {
             Outline::new(&self.corners)
         }

@@ -39,13 +39,10 @@ pub(crate) fn out_of_reach(
     est: &Estimate,
     config: &ExecutiveConfig,
 ) -> Option<String> {
-    use crate::model::WallGeometry;
-    let along = |key: &str, w, at: f64| match WallGeometry::of(w, est.room_m) {
-        None => Some(format!(
-            "wall: the room has no {w} (its walls are 0 to {})",
-            stucco_core::WallName::ALL.len() - 1
-        )),
-        Some(g) => (!(0.0..=g.length_m).contains(&at))
+    use crate::model::{WallGeometry, wall_in};
+    let along = |key: &str, w, at: f64| match wall_in(est, w, spec.name()) {
+        Err(e) => Some(e.to_string()),
+        Ok(g) => (!(0.0..=g.length_m).contains(&at))
             .then(|| format!("{key}: {at:.2} m is not on {w} (0 to {:.2} m)", g.length_m)),
     };
     let standoff = |w, s: f64| {
@@ -96,13 +93,8 @@ pub(crate) fn out_of_reach(
         } => along("at_m", *wall, *at_m).or_else(|| standoff(*wall, *standoff_m)),
         TaskSpec::Plaster { walls, .. } => walls
             .iter()
-            .find(|&&w| WallGeometry::of(w, est.room_m).is_none())
-            .map(|w| {
-                format!(
-                    "walls: the room has no {w} (its walls are 0 to {})",
-                    stucco_core::WallName::ALL.len() - 1
-                )
-            }),
+            .find_map(|&w| wall_in(est, w, spec.name()).err())
+            .map(|e| e.to_string()),
         _ => None,
     }
 }
