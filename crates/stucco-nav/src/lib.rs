@@ -67,6 +67,7 @@ mod ransac;
 mod room;
 mod room_ekf;
 mod room_graph;
+mod room_shape;
 mod rpe;
 mod rwht;
 mod scan_match;
@@ -98,6 +99,7 @@ pub use room_ekf::{
 pub use room_graph::{
     Door, DoorPlace, Room, RoomEvent, RoomGraph, RoomGraphConfig, RoomSide, Route,
 };
+pub use room_shape::RoomShape;
 pub use rpe::{Pairs, Rpe, relative_pose_error};
 pub use rwht::{RwhtConfig, RwhtExtractor};
 pub use scan_match::{

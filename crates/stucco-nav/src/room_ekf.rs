@@ -9,6 +9,11 @@
 //! and the position of each door along its wall (added with
 //! [`RoomEkf::add_door`]).
 //!
+//! The same filter holds a robot in a room of any shape, its drawing the
+//! prior ([`RoomEkf::in_polygon`]): the state's room rows are then each
+//! wall's angle and offset but wall 0's, which fixes the frame (see
+//! [`RoomShape`]).
+//!
 //! A scan is applied at its own stamp: the filter holds its estimate at the
 //! last scan's stamp and the encoder samples that came since; a new scan's
 //! stamp splits them into the part before it (predicted through, then the
@@ -28,10 +33,10 @@
 
 use crate::door::DoorOpening;
 use crate::odometry::{Displacement, OdometryConfig, turned_covariance};
+use crate::room_shape::RoomShape;
 use crate::wall::Wall;
-use nalgebra::{DMatrix, DVector, Matrix2, SMatrix, SVector, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2};
 use serde::Serialize;
-use std::f64::consts::{FRAC_PI_2, PI};
 use stucco_core::{EncoderSample, Pose2, Stamp, wrap_angle};
 
 /// The filter's state without doors: `(x, y, θ, xs, ys)`.
@@ -39,9 +44,10 @@ pub type RoomState = SVector<f64, 5>;
 /// Its covariance.
 pub type RoomCovariance = SMatrix<f64, 5, 5>;
 
-/// A door of the room: the wall it is in (0: x = 0, 1: y = 0, 2: x = xs,
-/// 3: y = ys) and the index of its position (along the wall's axis: y for
-/// walls 0 and 2, x for 1 and 3) in the state.
+/// A door of the room: the wall it is in (a rectangle's 0: x = 0, 1:
+/// y = 0, 2: x = xs, 3: y = ys) and the index of its position in the
+/// state (along the wall's axis: a rectangle's y for walls 0 and 2, x for
+/// 1 and 3; see [`RoomShape::door_centre`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct RoomDoor {
     /// The wall.
@@ -182,8 +188,8 @@ fn padded(p: &DMatrix<f64>, variance: f64) -> DMatrix<f64> {
 struct ErrorCovariance {
     /// Covariance of the state's error.
     p: DMatrix<f64>,
-    /// Its covariance with the four walls' shared errors, `(d, γ)` of wall
-    /// 0, then 1, 2, 3: `n × 8`.
+    /// Its covariance with the walls' shared errors, `(d, γ)` of wall 0,
+    /// then 1, 2, …: `n × 2·walls`.
     cross: DMatrix<f64>,
 }
 
@@ -226,6 +232,7 @@ impl ErrorCovariance {
 #[derive(Clone, Debug)]
 pub struct RoomEkf {
     config: RoomEkfConfig,
+    shape: RoomShape,
     /// The estimate at `at` (the last scan's stamp, or the start).
     x: DVector<f64>,
     /// The covariance the gains are made of.
@@ -242,16 +249,59 @@ pub struct RoomEkf {
 }
 
 impl RoomEkf {
-    /// A filter starting from `x0` with covariance `p0` at `at`.
+    /// A filter in a rectangular room starting from `x0` with covariance
+    /// `p0` at `at`.
     pub fn new(config: RoomEkfConfig, x0: RoomState, p0: RoomCovariance, at: Stamp) -> Self {
+        Self::in_shape(
+            config,
+            RoomShape::rectangle(),
+            DVector::from_column_slice(x0.as_slice()),
+            DMatrix::from_column_slice(5, 5, p0.as_slice()),
+            at,
+        )
+    }
+
+    /// A filter in a room of the shape `shape` (its drawing's walls the
+    /// prior, uncorrelated), the robot at `pose` with covariance
+    /// `pose_covariance`, at `at`.
+    pub fn in_polygon(
+        config: RoomEkfConfig,
+        shape: RoomShape,
+        pose: Pose2,
+        pose_covariance: Matrix3<f64>,
+        at: Stamp,
+    ) -> Self {
+        let n = 3 + shape.drawn().len();
+        let mut x = DVector::zeros(n);
+        let mut p = DMatrix::zeros(n, n);
+        x.rows_mut(0, 3)
+            .copy_from_slice(&[pose.x, pose.y, pose.theta]);
+        p.view_mut((0, 0), (3, 3)).copy_from(&pose_covariance);
+        for (i, (v, sigma)) in shape.drawn().iter().enumerate() {
+            x[3 + i] = *v;
+            p[(3 + i, 3 + i)] = sigma * sigma;
+        }
+        Self::in_shape(config, shape, x, p, at)
+    }
+
+    fn in_shape(
+        config: RoomEkfConfig,
+        shape: RoomShape,
+        x: DVector<f64>,
+        p: DMatrix<f64>,
+        at: Stamp,
+    ) -> Self {
+        let n = x.len();
+        let walls = shape.len();
         RoomEkf {
             config,
-            x: DVector::from_column_slice(x0.as_slice()),
-            p: DMatrix::from_column_slice(5, 5, p0.as_slice()),
+            shape,
             error: ErrorCovariance {
-                p: DMatrix::from_column_slice(5, 5, p0.as_slice()),
-                cross: DMatrix::zeros(5, 8),
+                p: p.clone(),
+                cross: DMatrix::zeros(n, 2 * walls),
             },
+            x,
+            p,
             doors: Vec::new(),
             at,
             anchor: None,
@@ -259,13 +309,19 @@ impl RoomEkf {
         }
     }
 
+    /// The walls of the room.
+    pub fn shape(&self) -> &RoomShape {
+        &self.shape
+    }
+
     /// The estimate at the last scan, and when that was.
     pub fn at_last_scan(&self) -> (&DVector<f64>, &DMatrix<f64>, Stamp) {
         (&self.x, &self.p, self.at)
     }
 
-    /// Adds a door in room wall `wall` at `position_m` along it (y for
-    /// walls 0 and 2, x for 1 and 3), `sigma_m` uncertain; returns it.
+    /// Adds a door in room wall `wall` at `position_m` along it (a
+    /// rectangle's y for walls 0 and 2, x for 1 and 3), `sigma_m`
+    /// uncertain; returns it.
     pub fn add_door(&mut self, wall: usize, position_m: f64, sigma_m: f64) -> RoomDoor {
         let n = self.x.len();
         self.x = self.x.clone().insert_row(n, position_m);
@@ -384,9 +440,12 @@ impl RoomEkf {
         for wall in order {
             let z = Vector2::new(wall.d_m, wall.gamma_rad);
             let r = wall.covariance + floor;
-            let best = (0..4)
+            let (l, dl) = laser_pose(&x, &self.config.laser_mount);
+            let ends = wall.ends.map(|e| l.transform_point(&e));
+            let best = (0..self.shape.len())
+                .filter(|&q| self.shape.may_see(&x, q, &l, ends))
                 .filter_map(|q| {
-                    let (z_hat, h) = observe(&x, q, &self.config.laser_mount);
+                    let (z_hat, h) = self.shape.observe_from(&x, q, &l, dl);
                     innovation(&p, &z, &z_hat, &h, &r, true).map(|m| (q, m, h))
                 })
                 .min_by(|a, b| a.1.m2.total_cmp(&b.1.m2));
@@ -406,7 +465,7 @@ impl RoomEkf {
                 .doors
                 .iter()
                 .filter_map(|door| {
-                    let (z_hat, h) = observe_door(&x, door, &self.config.laser_mount);
+                    let (z_hat, h) = door_seen(&self.shape, &x, door, &self.config.laser_mount);
                     innovation(&p, &z, &z_hat, &h, &r, false).map(|m| (door.index, m, h))
                 })
                 .min_by(|a, b| a.1.m2.total_cmp(&b.1.m2));
@@ -506,62 +565,33 @@ fn laser_pose(x: &DVector<f64>, mount: &Pose2) -> (Pose2, [f64; 2]) {
     )
 }
 
-/// The predicted observation `(d, γ)` of room wall `q` from the laser at
-/// `mount` on a robot in state `x`, and its Jacobian.
+/// The predicted observation `(d, γ)` of rectangular room wall `q` from
+/// the laser at `mount` on a robot in state `x`, and its Jacobian.
 pub fn observe(x: &DVector<f64>, q: usize, mount: &Pose2) -> (Vector2<f64>, DMatrix<f64>) {
-    let (l, [dlx, dly]) = laser_pose(x, mount);
-    let mut h = DMatrix::zeros(2, x.len());
-    h[(1, 2)] = -1.0;
-    let (d, normal) = match q {
-        0 => {
-            h[(0, 0)] = 1.0;
-            h[(0, 2)] = dlx;
-            (l.x, PI)
-        }
-        1 => {
-            h[(0, 1)] = 1.0;
-            h[(0, 2)] = dly;
-            (l.y, -FRAC_PI_2)
-        }
-        2 => {
-            h[(0, 0)] = -1.0;
-            h[(0, 2)] = -dlx;
-            h[(0, 3)] = 1.0;
-            (x[3] - l.x, 0.0)
-        }
-        _ => {
-            h[(0, 1)] = -1.0;
-            h[(0, 2)] = -dly;
-            h[(0, 4)] = 1.0;
-            (x[4] - l.y, FRAC_PI_2)
-        }
-    };
-    (Vector2::new(d, wrap_angle(normal - l.theta)), h)
+    let (l, dl) = laser_pose(x, mount);
+    RoomShape::rectangle().observe_from(x, q, &l, dl)
 }
 
-/// The predicted centre of `door`, in the laser's frame, and its Jacobian.
+/// The predicted centre of `door` of a rectangular room, in the laser's
+/// frame, and its Jacobian.
 pub fn observe_door(
     x: &DVector<f64>,
     door: &RoomDoor,
     mount: &Pose2,
 ) -> (Vector2<f64>, DMatrix<f64>) {
+    door_seen(&RoomShape::rectangle(), x, door, mount)
+}
+
+/// The predicted centre of `door` in a room of `shape`, in the laser's
+/// frame, and its Jacobian.
+fn door_seen(
+    shape: &RoomShape,
+    x: &DVector<f64>,
+    door: &RoomDoor,
+    mount: &Pose2,
+) -> (Vector2<f64>, DMatrix<f64>) {
     let (l, [dlx, dly]) = laser_pose(x, mount);
-    let s = x[door.index];
-    // The door's centre in the room, and which state it moves with.
-    let (centre, along, across) = match door.wall {
-        0 => (Vector2::new(0.0, s), Vector2::new(0.0, 1.0), None),
-        1 => (Vector2::new(s, 0.0), Vector2::new(1.0, 0.0), None),
-        2 => (
-            Vector2::new(x[3], s),
-            Vector2::new(0.0, 1.0),
-            Some((3, Vector2::new(1.0, 0.0))),
-        ),
-        _ => (
-            Vector2::new(s, x[4]),
-            Vector2::new(1.0, 0.0),
-            Some((4, Vector2::new(0.0, 1.0))),
-        ),
-    };
+    let (centre, along, by_rows) = shape.door_centre(x, door.wall, x[door.index]);
     let (sn, c) = l.theta.sin_cos();
     // p = R(−θ_L)·(centre − L).
     let r_inv = Matrix2::new(c, sn, -sn, c);
@@ -570,15 +600,17 @@ pub fn observe_door(
     let dr_inv = Matrix2::new(-sn, c, -c, -sn);
     let d_theta = dr_inv * v - r_inv * Vector2::new(dlx, dly);
     let mut h = DMatrix::zeros(2, x.len());
+    let a = r_inv * along;
     for row in 0..2 {
         h[(row, 0)] = -r_inv[(row, 0)];
         h[(row, 1)] = -r_inv[(row, 1)];
         h[(row, 2)] = d_theta[row];
-        let a = r_inv * along;
         h[(row, door.index)] = a[row];
-        if let Some((i, dir)) = across {
-            let b = r_inv * dir;
-            h[(row, i)] = b[row];
+    }
+    for (i, dir) in by_rows {
+        let b = r_inv * dir;
+        for row in 0..2 {
+            h[(row, i)] += b[row];
         }
     }
     (z, h)
