@@ -224,8 +224,8 @@ pub struct MissionReport {
     pub room_true_m: [f64; 2],
     /// Its σ at the end, m.
     pub room_sigma_m: [f64; 2],
-    /// Scans each wall (west, south, east, north) was used in.
-    pub walls_seen: [usize; 4],
+    /// Scans each wall (by index) was used in.
+    pub walls_seen: Vec<usize>,
     /// The doors found or given.
     pub doors: Vec<DoorReport>,
     /// The wall passes.
@@ -918,7 +918,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
             .doors
             .iter()
             .filter_map(|d| {
-                let g = WallGeometry::of(d.wall, est.room_m)?;
+                let g = WallGeometry::in_room(&est, d.wall)?;
                 let c = Point2::from(g.point(d.position_m, 0.0));
                 Some(DoorReport {
                     wall: d.wall,
@@ -1070,7 +1070,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
             room_m: est.room_m,
             room_true_m: frame.size_m,
             room_sigma_m: est.room_sigma_m,
-            walls_seen: est.walls_seen,
+            walls_seen: est.walls_seen.clone(),
             doors,
             passes: passes
                 .into_iter()
@@ -1245,7 +1245,7 @@ fn draw_run(
         .doors
         .iter()
         .filter_map(|d| {
-            let c = WallGeometry::of(d.wall, est.room_m)?.point(d.position_m, 0.0);
+            let c = WallGeometry::in_room(est, d.wall)?.point(d.position_m, 0.0);
             Some((c.x, c.y))
         })
         .collect();
@@ -1326,6 +1326,17 @@ pub(crate) fn mission_robot<P: Platform>(
     let exec = mission.executive(spec, unattended);
     let mut robot = robot_on(platform, spec, x0, size_sigma, exec)?;
     let nav = robot.perception_mut();
+    let room = mission_room(mission, resume)?;
+    // A room that is not a rectangle is kept in its drawing's polygon.
+    if let (Some(plan), Some(room)) = (mission.floor_plan(), room) {
+        let outline = plan
+            .rooms()
+            .get(room)
+            .map(|r| r.outline())
+            .unwrap_or_default();
+        nav.keep_room_drawn(&outline, known.room_sigma_m)
+            .map_err(|e| anyhow::anyhow!("the start room's drawing: {e}"))?;
+    }
     // The doors it knew, before the plan's (those it holds are not added
     // twice).
     for d in resume.iter().flat_map(|m| &m.doors) {
@@ -1334,7 +1345,7 @@ pub(crate) fn mission_robot<P: Platform>(
     for (wall, w) in resume.iter().flat_map(|m| &m.windows) {
         nav.add_known_window(*wall, *w);
     }
-    if let (Some(plan), Some(room)) = (mission.floor_plan(), mission_room(mission, resume)?) {
+    if let (Some(plan), Some(room)) = (mission.floor_plan(), room) {
         // Scoring follows the robot into each room by its name.
         for r in plan.rooms() {
             RoomFrame::named(&layout, &r.name)?;

@@ -55,9 +55,9 @@ impl WallName {
         usize::from(self.0)
     }
 
-    /// Wall `i` of a rectangular room (0..4).
+    /// Wall `i` of its room, when `i` fits in 16 bits.
     pub fn from_index(i: usize) -> Option<WallName> {
-        WallName::ALL.get(i).copied()
+        u16::try_from(i).ok().map(WallName)
     }
 
     /// The wall a rectangular room's compass name names.

@@ -265,7 +265,7 @@ impl Behaviour {
                 },
                 BehaviourKind::FollowWall { wall, to_m, .. },
             ) => {
-                let Some(g) = WallGeometry::of(*wall, est.room_m) else {
+                let Some(g) = WallGeometry::in_room(est, *wall) else {
                     return Step::Done;
                 };
                 let at = g.position(&pose.position().coords);

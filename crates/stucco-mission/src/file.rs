@@ -956,23 +956,39 @@ room = "office"
                 .map(|(i, _)| i + 1)
                 .expect("the line")
         };
-        // An L-shaped office: refused at load, not taken for its box.
-        let l_room = DRAWN.replace(
-            "[[0.01, 1.65], [4.0, 1.66], [3.98, 5.0], [0.0, 4.99]]",
-            "[[0.0, 1.65], [4.0, 1.65], [4.0, 3.5], [2.0, 3.5], [2.0, 5.0], [0.0, 5.0]]",
+        // An L-shaped office is a room of six walls, not its box; a door
+        // drawn in the notch's wall, which the hall does not build, is
+        // refused naming its line.
+        let l_room = DRAWN
+            .replace(
+                "[[0.01, 1.65], [4.0, 1.66], [3.98, 5.0], [0.0, 4.99]]",
+                "[[0.0, 1.65], [4.0, 1.65], [4.0, 3.5], [2.0, 3.5], [2.0, 5.0], [0.0, 5.0]]",
+            )
+            .replace("at_m = [2.0, 5.0]", "at_m = [1.0, 5.0]");
+        let m = Mission::parse(&l_room, Path::new("drawn.toml")).expect("an L-shaped office");
+        let plan = m.floor_plan().expect("a plan");
+        let office = &plan.rooms()[1];
+        assert_eq!(office.outline().len(), 6);
+        assert_eq!(office.walls().len(), 6);
+        let (_, side) = plan.doors_of(1).next().expect("its door");
+        assert_eq!(
+            (side.wall, side.along_m),
+            (stucco_core::WallName::new(0), 2.0)
         );
-        let e = fault(&l_room);
+        let in_notch = l_room.replace("at_m = [2.0, 1.575]", "at_m = [3.0, 3.5]");
+        let e = fault(&in_notch);
         assert!(
-            e.starts_with(&format!("drawn.toml:{}:", line("corners", 1))),
+            e.starts_with(&format!("drawn.toml:{}:", line("at_m", 0))),
             "{e}"
         );
-        assert!(e.contains("corners") && e.contains("6 corners"), "{e}");
+        assert!(e.contains("\"hall\""), "{e}");
         // Three corners of a square and a fourth near the first: not one.
         let folded = DRAWN.replace(
             "[[0.01, 1.65], [4.0, 1.66], [3.98, 5.0], [0.0, 4.99]]",
             "[[0.0, 1.65], [4.0, 1.65], [4.0, 5.0], [0.01, 1.66]]",
         );
         assert!(fault(&folded).contains("corners"), "{}", fault(&folded));
+        assert!(fault(&folded).contains("drawn twice"), "{}", fault(&folded));
         // Clockwise.
         let cw = DRAWN.replace(
             "[[0.0, 0.0], [6.0, 0.0], [6.0, 1.5], [0.0, 1.5]]",

@@ -1,10 +1,10 @@
-//! The floor plan a mission may carry: rooms as rectangles on the
-//! building's drawing, doors between them. The robot keeps one room frame
+//! The floor plan a mission may carry: rooms on the building's drawing
+//! (rectangles, or any shape given by its corners), doors between them. The robot keeps one room frame
 //! at a time (its filter's); the plan says which rooms there are, how they
 //! connect, and where the next room's frame lies once the robot has gone
 //! through a door. Routes between named rooms run over its doors.
 
-use crate::model::{WallGeometry, rectangle_walls};
+use crate::model::{WallGeometry, walls_of_room};
 use crate::task::WallName;
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -12,9 +12,10 @@ use std::collections::BTreeSet;
 use stucco_core::Pose2;
 
 /// A room of the plan: a rectangle with its walls along the plan's axes,
-/// given by its south-west corner and size or by its corners. Its frame
-/// (the one the robot's filter keeps while inside) has its origin in the
-/// south-west corner.
+/// given by its south-west corner and size or by its four corners, or a
+/// room of any other shape given by its corners. Its frame (the one the
+/// robot's filter keeps while inside) has its origin in the south-west
+/// corner of its box.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanRoom {
@@ -54,22 +55,56 @@ pub struct PlanWindow {
 /// by up to 3 cm in each coordinate of each corner.
 const CORNER_SLACK_M: f64 = 0.05;
 
-/// The rectangle `corners` draw, as `(origin, size)`, or why they are not
-/// one the robot can keep.
-fn rectangle_of(corners: &[[f64; 2]]) -> Result<([f64; 2], [f64; 2]), String> {
+impl PlanRoom {
+    /// Its corners in its own frame, counter-clockwise, when it is not a
+    /// rectangle along the drawing's axes (empty for one: its walls are
+    /// then the rectangle's four, west, south, east, north).
+    pub fn outline(&self) -> Vec<[f64; 2]> {
+        match &self.corners {
+            Some(c) if rectangle_of(c).is_none() => c
+                .iter()
+                .map(|p| [p[0] - self.origin_m[0], p[1] - self.origin_m[1]])
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Its wall `w` in its own frame, when it has it.
+    pub fn wall(&self, w: WallName) -> Option<WallGeometry> {
+        WallGeometry::of_room(&self.outline(), self.size_m, w)
+    }
+
+    /// Its walls in its own frame, by name.
+    pub fn walls(&self) -> Vec<(WallName, WallGeometry)> {
+        walls_of_room(&self.outline(), self.size_m)
+    }
+}
+
+/// The box of a room given by `corners`, as `(origin, size)`: the
+/// rectangle they draw (each side the mean of its two corners), or the
+/// box round any other shape; or why they make no room.
+fn box_of(corners: &[[f64; 2]]) -> Result<([f64; 2], [f64; 2]), String> {
     if let Some(fault) = stucco_plan::Outline::new(corners).fault() {
         return Err(fault);
     }
-    let n = corners.len();
-    let not_a_rectangle = || {
-        format!(
-            "a room of {n} corners that is not a rectangle along the drawing's axes: the \
-             planner plans on any shape, but the robot's room filter and its ways keep such \
-             rectangles only, for now"
-        )
-    };
-    if n != 4 {
-        return Err(not_a_rectangle());
+    if let Some(rectangle) = rectangle_of(corners) {
+        return Ok(rectangle);
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for c in corners {
+        for i in 0..2 {
+            lo[i] = lo[i].min(c[i]);
+            hi[i] = hi[i].max(c[i]);
+        }
+    }
+    Ok((lo, [hi[0] - lo[0], hi[1] - lo[1]]))
+}
+
+/// The rectangle along the drawing's axes `corners` draw (each side the
+/// mean of its two corners), as `(origin, size)`, if they draw one.
+fn rectangle_of(corners: &[[f64; 2]]) -> Option<([f64; 2], [f64; 2])> {
+    if corners.len() != 4 {
+        return None;
     }
     // The corner nearest the south-west first; counter-clockwise, the
     // others are then south-east, north-east, north-west. Each side is
@@ -90,10 +125,7 @@ fn rectangle_of(corners: &[[f64; 2]]) -> Result<([f64; 2], [f64; 2]), String> {
             .iter()
             .zip(&fitted)
             .all(|(c, f)| (c[0] - f[0]).hypot(c[1] - f[1]) <= CORNER_SLACK_M);
-    if !on_box {
-        return Err(not_a_rectangle());
-    }
-    Ok(([x0, y0], [x1 - x0, y1 - y0]))
+    on_box.then_some(([x0, y0], [x1 - x0, y1 - y0]))
 }
 
 /// A door of the plan between two rooms.
@@ -200,7 +232,7 @@ impl FloorPlan {
             }
             if let Some(corners) = &r.corners {
                 let (origin, size) =
-                    rectangle_of(corners).map_err(|why| fault("room", i, "corners", why))?;
+                    box_of(corners).map_err(|why| fault("room", i, "corners", why))?;
                 let given = r.size_m != [0.0, 0.0] || r.origin_m != [0.0, 0.0];
                 let same = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9;
                 if given && !(same(r.origin_m, origin) && same(r.size_m, size)) {
@@ -239,7 +271,8 @@ impl FloorPlan {
                     .ok_or_else(|| fault("door", i, "rooms", format!("no room {name:?}")))?;
                 let r = &rooms[room];
                 let at = Vector2::new(d.at_m[0] - r.origin_m[0], d.at_m[1] - r.origin_m[1]);
-                rectangle_walls(r.size_m)
+                r.walls()
+                    .into_iter()
                     .filter(|(_, g)| g.distance(&at).abs() <= DOOR_IN_WALL_M)
                     .find(|(_, g)| {
                         let along = g.position(&at);
@@ -298,7 +331,7 @@ impl FloorPlan {
             }
             let r = &self.rooms[room];
             let at = Vector2::new(w.at_m[0] - r.origin_m[0], w.at_m[1] - r.origin_m[1]);
-            let in_wall = rectangle_walls(r.size_m).any(|(_, g)| {
+            let in_wall = r.walls().iter().any(|(_, g)| {
                 let along = g.position(&at);
                 g.distance(&at).abs() <= DOOR_IN_WALL_M
                     && along - w.width_m / 2.0 >= 0.0
@@ -434,33 +467,45 @@ impl FloorPlan {
 
     /// The pose in the frame of the room beyond `door` of a robot at
     /// `pose` in the frame of `room`. `here` is where the filter puts the
-    /// door's middle along its wall and the room's size; `there`, the same
-    /// for the room beyond when the robot has learnt it (none: as drawn).
-    /// The door anchors the two frames, so an error of the plan elsewhere
-    /// in either room does not carry over.
+    /// door's middle in this room's frame; `there`, where it puts it in
+    /// the frame of the room beyond when the robot has learnt that room
+    /// (none: as drawn). The door anchors the two frames, so an error of
+    /// the plan elsewhere in either room does not carry over.
     pub fn transfer(
         &self,
         door: usize,
         room: usize,
         pose: &Pose2,
-        here: (f64, [f64; 2]),
-        there: Option<(f64, [f64; 2])>,
+        here: Vector2<f64>,
+        there: Option<Vector2<f64>>,
     ) -> Option<(usize, Pose2)> {
-        let ((along_m, size_m), far) = (here, self.side(door, self.beyond(door, room)?)?);
-        let here = self.side(door, room)?;
         let next = self.beyond(door, room)?;
+        let (near, far) = (self.side(door, room)?, self.side(door, next)?);
         let (a, b) = (&self.rooms[room], &self.rooms[next]);
         // The door's middle as the filter places it, and as the plan does.
-        let est = WallGeometry::of(here.wall, size_m)?.point(along_m, 0.0);
-        let plan = WallGeometry::of(here.wall, a.size_m)?.point(here.along_m, 0.0);
-        let p = pose.position().coords + (plan - est);
+        let plan = a.wall(near.wall)?.point(near.along_m, 0.0);
+        let p = pose.position().coords + (plan - here);
         let shift = Vector2::from(a.origin_m) - Vector2::from(b.origin_m);
         let mut q = p + shift;
-        if let Some((along, size)) = there {
-            let drawn = WallGeometry::of(far.wall, b.size_m)?.point(far.along_m, 0.0);
-            q += WallGeometry::of(far.wall, size)?.point(along, 0.0) - drawn;
+        if let Some(learnt) = there {
+            q += learnt - b.wall(far.wall)?.point(far.along_m, 0.0);
         }
         Some((next, Pose2::new(q.x, q.y, pose.theta)))
+    }
+
+    /// The middle of `door` in the frame of `room`, a room whose walls the
+    /// robot holds as `corners` (none: the rectangle `size_m`), the door
+    /// `along_m` along its wall.
+    pub fn door_middle(
+        &self,
+        door: usize,
+        room: usize,
+        corners: &[[f64; 2]],
+        size_m: [f64; 2],
+        along_m: f64,
+    ) -> Option<Vector2<f64>> {
+        let side = self.side(door, room)?;
+        Some(WallGeometry::of_room(corners, size_m, side.wall)?.point(along_m, 0.0))
     }
 }
 
@@ -576,7 +621,8 @@ mod tests {
         // filter puts the door 3 cm east of the plan and the corridor
         // 2 cm wider.
         let pose = Pose2::new(2.0, 2.4, 1.5);
-        let (room, q) = p.transfer(0, 0, &pose, (2.03, [10.0, 2.02]), None).unwrap();
+        let here = p.door_middle(0, 0, &[], [10.0, 2.02], 2.03).unwrap();
+        let (room, q) = p.transfer(0, 0, &pose, here, None).unwrap();
         assert_eq!(room, 1);
         // The door's middle: (2.03, 2.02) in the filter's corridor, so
         // the robot is 3 cm west of it and 0.38 m beyond the wall line,
@@ -584,11 +630,17 @@ mod tests {
         assert!((q.x - 1.97).abs() < 1e-9, "{q:?}");
         assert!((q.y - 0.18).abs() < 1e-9, "{q:?}");
         assert_eq!(q.theta, 1.5);
-        assert_eq!(p.transfer(0, 2, &pose, (0.0, [1.0, 1.0]), None), None);
+        assert_eq!(p.transfer(0, 2, &pose, Vector2::zeros(), None), None);
         // Room a as the robot learnt it: its south wall's door 2 cm west of
         // the drawing's, the room as drawn; the pose follows the door.
         let (_, r) = p
-            .transfer(0, 0, &pose, (2.03, [10.0, 2.02]), Some((1.98, [4.9, 4.0])))
+            .transfer(
+                0,
+                0,
+                &pose,
+                here,
+                p.door_middle(0, 1, &[], [4.9, 4.0], 1.98),
+            )
             .unwrap();
         assert!(
             (r.x - 1.95).abs() < 1e-9 && (r.y - 0.18).abs() < 1e-9,

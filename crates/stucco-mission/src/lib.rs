@@ -60,7 +60,9 @@ pub use file::{
 };
 pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom, PlanWindow};
 pub use ledger::{MAX_DEADLINE_AHEAD_S, MAX_ID_BYTES, MAX_KEPT, MAX_OPERATOR_BYTES};
-pub use model::{DoorEstimate, Estimate, WallGeometry, WindowEstimate, rectangle_walls, wall_in};
+pub use model::{
+    DoorEstimate, Estimate, WallGeometry, WindowEstimate, room_walls, wall_in, walls_of_room,
+};
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{
     FailurePolicy, Hazard, LinkLossPolicy, LostPolicy, SafetyConfig, Supervisor, Verdict,

@@ -23,7 +23,7 @@ use nalgebra::{Rotation2, Vector2};
 use std::collections::{BTreeMap, BTreeSet};
 use stucco_control::GainSchedule;
 use stucco_core::{Pose2, VehicleSpec, wrap_angle};
-use stucco_plan::Obstacle;
+use stucco_plan::{Obstacle, Outline};
 
 /// Room kept between the field and the walls for the motion's own
 /// error (estimate and tracking), m.
@@ -83,6 +83,8 @@ impl Doorway {
 #[derive(Clone, Debug)]
 pub(crate) struct Space<'a> {
     room_m: [f64; 2],
+    /// The floor's outline of a room that is not a rectangle.
+    outline: Option<Outline<'a>>,
     obstacles: &'a [Obstacle],
     doorways: Vec<Doorway>,
     /// The body's rectangle in its own frame, field and margins included:
@@ -103,10 +105,12 @@ pub(crate) struct Space<'a> {
 }
 
 impl<'a> Space<'a> {
-    /// The room `room_m` with its `doors` and `obstacles`, for `vehicle`
+    /// The room `room_m` (or, when they are given, of the `corners`
+    /// within that box) with its `doors` and `obstacles`, for `vehicle`
     /// under the supervisor's `safety` field, driven at `speed_mps`.
     pub fn new(
         room_m: [f64; 2],
+        corners: &'a [[f64; 2]],
         doors: &[DoorEstimate],
         obstacles: &'a [Obstacle],
         vehicle: &VehicleSpec,
@@ -118,7 +122,7 @@ impl<'a> Space<'a> {
             .filter_map(|d| {
                 let half = 0.5 * d.width_m.unwrap_or(vehicle.width_m + 0.1);
                 Some(Doorway {
-                    wall: WallGeometry::of(d.wall, room_m)?,
+                    wall: WallGeometry::of_room(corners, room_m, d.wall)?,
                     from_m: d.position_m - half,
                     to_m: d.position_m + half,
                 })
@@ -135,6 +139,7 @@ impl<'a> Space<'a> {
             safety.obstacle_margin_m + creep * creep / (2.0 * safety.stop_decel_mps2) + 0.1 * creep;
         Space {
             room_m,
+            outline: (!corners.is_empty()).then(|| Outline::new(corners)),
             obstacles,
             doorways,
             rear_m: vehicle.rear_overhang_m + PLAN_MARGIN_M,
@@ -150,8 +155,11 @@ impl<'a> Space<'a> {
 
     fn free_point(&self, p: &Vector2<f64>) -> bool {
         let [xs, ys] = self.room_m;
-        ((0.0..=xs).contains(&p.x) && (0.0..=ys).contains(&p.y))
-            || self.doorways.iter().any(|d| d.contains(p))
+        let in_room = match &self.outline {
+            Some(o) => o.contains(&(*p).into()),
+            None => (0.0..=xs).contains(&p.x) && (0.0..=ys).contains(&p.y),
+        };
+        in_room || self.doorways.iter().any(|d| d.contains(p))
     }
 
     /// True when the body (with its field's sides) at `p` heading `theta`
@@ -167,11 +175,15 @@ impl<'a> Space<'a> {
         ]
         .map(|c| p + r * c);
         let [xs, ys] = self.room_m;
-        let inside = corners
-            .iter()
-            .all(|c| (0.0..=xs).contains(&c.x) && (0.0..=ys).contains(&c.y));
-        // Inside the (convex) room, the corners tell; reaching into a
-        // doorway, the outline is walked.
+        let inside = match &self.outline {
+            Some(o) => o.holds(&corners.map(Into::into), 0.0),
+            None => corners
+                .iter()
+                .all(|c| (0.0..=xs).contains(&c.x) && (0.0..=ys).contains(&c.y)),
+        };
+        // Inside the room, the corners tell (a room of another shape: and
+        // no wall reaching into the body); reaching into a doorway, the
+        // outline is walked.
         let walls_clear = inside
             || (!self.doorways.is_empty()
                 && (0..4).all(|i| {
@@ -337,6 +349,54 @@ impl<'a> Space<'a> {
         {
             return None;
         }
+        self.search(from, goal)
+            .or_else(|| self.turn_run_turn(from, goal))
+    }
+
+    /// A way in three parts, for where the search finds none within its
+    /// budget (a long corridor too narrow to turn in, with a turn needed
+    /// at either end: the search, drawn on by the goal, spends itself
+    /// along the run): turned where it stands to face along the run (or
+    /// away from it, to back down it), the straight run, and turned at
+    /// the goal onto its heading; each turn a search of its own about its
+    /// place. The quicker of forward and backing.
+    fn turn_run_turn(&self, from: &Pose2, goal: &Pose2) -> Option<(f64, Vec<Move>)> {
+        let d = goal.position() - from.position();
+        if d.norm() <= AT_GOAL_M {
+            return None;
+        }
+        let turned = |a: &Pose2, b: &Pose2| {
+            if wrap_angle(b.theta - a.theta).abs() <= AT_GOAL_RAD {
+                Some(Vec::new())
+            } else {
+                self.search(a, b).map(|(_, m)| m)
+            }
+        };
+        [true, false]
+            .into_iter()
+            .filter_map(|forward| {
+                let back = if forward { 0.0 } else { std::f64::consts::PI };
+                let face = wrap_angle(d.y.atan2(d.x) + back);
+                let (a, b) = (
+                    Pose2::new(from.x, from.y, face),
+                    Pose2::new(goal.x, goal.y, face),
+                );
+                if !self.body_clear(&a.position().coords, face)
+                    || !self.run_clear(&a.position().coords, &b.position().coords, face)
+                {
+                    return None;
+                }
+                let mut moves = turned(from, &a)?;
+                moves.push(Move::Run { to: b, forward });
+                moves.extend(turned(&b, goal)?);
+                let moves = merged(from.theta, moves);
+                Some((self.cost(from, &moves), moves))
+            })
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+    }
+
+    /// The A* search of [`Space::manoeuvre`], its ends known clear.
+    fn search(&self, from: &Pose2, goal: &Pose2) -> Option<(f64, Vec<Move>)> {
         // The time of the run and the turn still needed, inflated: the
         // search is greedier and its way at most that much dearer than
         // the best.
@@ -509,6 +569,7 @@ fn merged(mut theta: f64, moves: Vec<Move>) -> Vec<Move> {
 mod tests {
     use super::*;
     use crate::task::WallName;
+    use std::f64::consts::{FRAC_PI_2, PI};
 
     fn demo_safety() -> SafetyConfig {
         SafetyConfig {
@@ -538,8 +599,47 @@ mod tests {
                 }
             }
         }
-        assert!((p - goal.position().coords).norm() < 1e-9);
+        assert!((p - goal.position().coords).norm() <= AT_GOAL_M);
         assert!(wrap_angle(theta - goal.theta).abs() <= AT_GOAL_RAD);
+    }
+
+    #[test]
+    fn a_long_corridor_is_driven_with_a_turn_at_either_end() {
+        // A generated building's corridor, 20.8 × 1.625 m: the robot cannot
+        // turn on the spot in it (its front corners sweep 1.66 m across
+        // with the field's margins). Turned round where it stands, driven
+        // to the far end and turned there, or stood across the corridor
+        // and taken to the far end to stand across it again (the search
+        // alone, drawn on by the goal, spent its budget along the run).
+        let v = VehicleSpec::default();
+        let space = Space::new(
+            [20.8, 1.625],
+            &[],
+            &[],
+            &[],
+            &v,
+            &SafetyConfig::default(),
+            0.3,
+        );
+        for (from, goal) in [
+            (Pose2::new(19.0, 0.8, 0.0), Pose2::new(19.0, 0.8, PI)),
+            (Pose2::new(19.0, 0.8, 0.0), Pose2::new(2.0, 0.8, PI)),
+            (Pose2::new(19.0, 0.8, 0.0), Pose2::new(2.0, 0.8, 0.0)),
+            (
+                Pose2::new(20.06, 0.76, 1.77),
+                Pose2::new(1.2, 0.85, -FRAC_PI_2),
+            ),
+        ] {
+            let t = std::time::Instant::now();
+            let found = space.manoeuvre(&from, &goal);
+            eprintln!(
+                "{from:?} -> {goal:?}: {:?} in {:?}",
+                found.as_ref().map(|f| (f.0, f.1.len())),
+                t.elapsed()
+            );
+            let (_, moves) = found.expect("a way");
+            assert_way_clear(&space, &from, &moves, &goal);
+        }
     }
 
     #[test]
@@ -564,7 +664,7 @@ mod tests {
                 plan_door: None,
             },
         ];
-        let space = Space::new([8.0, 1.2], &doors, &[], &v, &demo_safety(), 0.3);
+        let space = Space::new([8.0, 1.2], &[], &doors, &[], &v, &demo_safety(), 0.3);
         let from = Pose2::new(3.55, 0.25, std::f64::consts::FRAC_PI_2);
         // A turn on the spot there would put the front through the north
         // wall.
@@ -600,7 +700,7 @@ mod tests {
     #[test]
     fn a_room_wide_enough_gets_the_plain_way() {
         let v = VehicleSpec::default();
-        let space = Space::new([5.0, 4.0], &[], &[], &v, &demo_safety(), 0.3);
+        let space = Space::new([5.0, 4.0], &[], &[], &[], &v, &demo_safety(), 0.3);
         let from = Pose2::new(2.0, 2.0, 0.0);
         let goal = Pose2::new(3.0, 2.0, 1.0);
         assert!(space.direct_cost(&from, &goal).is_some());
@@ -613,7 +713,7 @@ mod tests {
         let v = VehicleSpec::default();
         // 1.0 m wide: the body with its field's sides fits heading along
         // it, but no heading across it fits.
-        let space = Space::new([6.0, 1.0], &[], &[], &v, &demo_safety(), 0.3);
+        let space = Space::new([6.0, 1.0], &[], &[], &[], &v, &demo_safety(), 0.3);
         let from = Pose2::new(2.0, 0.5, 0.0);
         let back = Pose2::new(4.0, 0.5, std::f64::consts::PI);
         assert!(space.manoeuvre(&from, &back).is_none());
@@ -639,7 +739,7 @@ mod tests {
             max_m: [2.71, 1.46],
             height_m: 0.45,
         }];
-        let space = Space::new([4.0, 3.65], &doors, &chair, &v, &demo_safety(), 0.3);
+        let space = Space::new([4.0, 3.65], &[], &doors, &chair, &v, &demo_safety(), 0.3);
         let from = Pose2::new(3.4, 0.2, std::f64::consts::FRAC_PI_2);
         // Back out through the door: facing it from 0.8 m in.
         let goal = Pose2::new(3.4, 0.8, -std::f64::consts::FRAC_PI_2);

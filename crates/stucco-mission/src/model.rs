@@ -25,15 +25,37 @@ impl WallGeometry {
     /// The wall `w` of a rectangular room `room_m` in size (the planner's
     /// frame of it: one definition of the room's walls), when it has it.
     pub fn of(w: WallName, room_m: [f64; 2]) -> Option<Self> {
-        let line = stucco_plan::WallLine::of(w, room_m)?;
-        Some(WallGeometry {
+        stucco_plan::WallLine::of(w, room_m).map(Self::from)
+    }
+
+    /// Wall `w` of the room the estimate `est` holds (its corners', or
+    /// the rectangle's), when it has it.
+    pub fn in_room(est: &Estimate, w: WallName) -> Option<Self> {
+        Self::of_room(&est.corners, est.room_m, w)
+    }
+
+    /// Wall `w` of a room given by its `corners` (counter-clockwise; none:
+    /// the rectangle `room_m`), when it has it.
+    pub fn of_room(corners: &[[f64; 2]], room_m: [f64; 2], w: WallName) -> Option<Self> {
+        stucco_plan::WallLine::of_room(corners, room_m)
+            .get(w.index())
+            .copied()
+            .map(Self::from)
+    }
+}
+
+impl From<stucco_plan::WallLine> for WallGeometry {
+    fn from(line: stucco_plan::WallLine) -> Self {
+        WallGeometry {
             origin: line.origin,
             along: line.along,
             inward: line.inward,
             length_m: line.length_m,
-        })
+        }
     }
+}
 
+impl WallGeometry {
     /// Distance of `p` from the wall, positive inside the room, m.
     pub fn distance(&self, p: &Vector2<f64>) -> f64 {
         self.inward.dot(&(p - self.origin))
@@ -92,18 +114,57 @@ impl WallGeometry {
 
 /// Wall `w` of the room `est` knows, or a failure of `task` naming it.
 pub fn wall_in(est: &Estimate, w: WallName, task: &str) -> Result<WallGeometry, TaskFailure> {
-    WallGeometry::of(w, est.room_m).ok_or_else(|| TaskFailure::UnknownWall {
+    WallGeometry::in_room(est, w).ok_or_else(|| TaskFailure::UnknownWall {
         task: task.to_owned(),
         wall: w,
-        walls: WallName::ALL.len(),
+        walls: room_walls(est).len(),
     })
 }
 
-/// The walls of a rectangular room `room_m` in size, by name.
-pub fn rectangle_walls(room_m: [f64; 2]) -> impl Iterator<Item = (WallName, WallGeometry)> {
-    WallName::ALL
+/// How deep the room the estimate `est` holds reaches from wall `g`'s
+/// line into the room, m (a rectangle's side across that wall).
+pub fn depth_from(est: &Estimate, g: &WallGeometry) -> f64 {
+    depth_of_room(&est.corners, est.room_m, g)
+}
+
+/// How deep a room given by its `corners` (none: the rectangle `room_m`)
+/// reaches from wall `g`'s line into the room, m.
+pub fn depth_of_room(corners: &[[f64; 2]], room_m: [f64; 2], g: &WallGeometry) -> f64 {
+    let [xs, ys] = room_m;
+    let rectangle = [[0.0, 0.0], [xs, 0.0], [xs, ys], [0.0, ys]];
+    let corners = if corners.is_empty() {
+        &rectangle[..]
+    } else {
+        corners
+    };
+    corners
+        .iter()
+        .map(|c| g.distance(&Vector2::from(*c)))
+        .fold(0.0, f64::max)
+}
+
+/// The walls a task names (`Some`), or every wall of the room the
+/// estimate `est` holds (`None`: a task's default).
+pub fn walls_or_all(walls: Option<&[WallName]>, est: &Estimate) -> Vec<WallName> {
+    match walls {
+        Some(w) => w.to_vec(),
+        None => room_walls(est).into_iter().map(|(w, _)| w).collect(),
+    }
+}
+
+/// The walls of the room the estimate `est` holds, by name.
+pub fn room_walls(est: &Estimate) -> Vec<(WallName, WallGeometry)> {
+    walls_of_room(&est.corners, est.room_m)
+}
+
+/// The walls of a room given by its `corners` (none: the rectangle
+/// `room_m`), by name.
+pub fn walls_of_room(corners: &[[f64; 2]], room_m: [f64; 2]) -> Vec<(WallName, WallGeometry)> {
+    stucco_plan::WallLine::of_room(corners, room_m)
         .into_iter()
-        .filter_map(move |w| Some((w, WallGeometry::of(w, room_m)?)))
+        .enumerate()
+        .filter_map(|(k, line)| Some((WallName::from_index(k)?, line.into())))
+        .collect()
 }
 
 #[cfg(test)]

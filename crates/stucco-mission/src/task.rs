@@ -42,9 +42,6 @@ fn survey_speed() -> f64 {
 fn survey_inset() -> f64 {
     1.0
 }
-fn all_walls() -> Vec<WallName> {
-    WallName::ALL.to_vec()
-}
 fn sightings() -> usize {
     20
 }
@@ -99,9 +96,9 @@ pub enum TaskSpec {
         /// the walls.
         #[serde(default)]
         path: Option<Vec<[f64; 2]>>,
-        /// The walls to observe.
-        #[serde(default = "all_walls")]
-        walls: Vec<WallName>,
+        /// The walls to observe (by default every wall of the room).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        walls: Option<Vec<WallName>>,
         /// Scans each must have been used in.
         #[serde(default = "sightings")]
         min_sightings: usize,
@@ -217,9 +214,9 @@ pub enum TaskSpec {
     /// checkpoint; a resumed run carries out the same plan from the next
     /// stroke.
     Plaster {
-        /// The walls to plaster.
-        #[serde(default = "all_walls")]
-        walls: Vec<WallName>,
+        /// The walls to plaster (by default every wall of the room).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        walls: Option<Vec<WallName>>,
         /// Plaster the ceiling too.
         #[serde(default = "yes")]
         ceiling: bool,
@@ -323,7 +320,7 @@ impl TaskSpec {
     pub fn map_room() -> TaskSpec {
         TaskSpec::MapRoom {
             path: None,
-            walls: all_walls(),
+            walls: None,
             min_sightings: sightings(),
             inset_m: survey_inset(),
             speed_mps: survey_speed(),
@@ -382,10 +379,10 @@ impl TaskSpec {
                 speed_mps: drive_speed(),
             },
             C::PlasterSurface { surface, region } => TaskSpec::Plaster {
-                walls: match surface {
+                walls: Some(match surface {
                     stucco_core::SurfaceId::Wall(w) => vec![*w],
                     stucco_core::SurfaceId::Ceiling => Vec::new(),
-                },
+                }),
                 ceiling: *surface == stucco_core::SurfaceId::Ceiling,
                 speed_mps: follow_speed(),
                 settle_s: settle(),
@@ -430,7 +427,7 @@ impl TaskSpec {
                 timeout_s,
                 ..
             } => {
-                if walls.is_empty() {
+                if walls.as_ref().is_some_and(Vec::is_empty) {
                     return Some(("walls", "at least one wall to observe"));
                 }
                 if let Some(p) = path
@@ -471,11 +468,11 @@ impl TaskSpec {
                 region,
                 ..
             } => {
-                if walls.is_empty() && !ceiling {
+                if walls.as_ref().is_some_and(Vec::is_empty) && !ceiling {
                     return Some(("walls", "nothing to plaster: no walls and no ceiling"));
                 }
                 if let Some(r) = region {
-                    if walls.len() != 1 || *ceiling {
+                    if walls.as_ref().is_none_or(|w| w.len() != 1) || *ceiling {
                         return Some((
                             "region",
                             "a region is part of one wall: walls = [that wall], ceiling = false",

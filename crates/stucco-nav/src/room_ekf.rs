@@ -314,6 +314,26 @@ impl RoomEkf {
         &self.shape
     }
 
+    /// The filter of this room with the robot placed anew at `pose`,
+    /// `pose_covariance` uncertain, at `at`: what it learnt of the room's
+    /// walls kept (their rows and covariance), their correlation with the
+    /// old pose and the doors dropped (put them in again with
+    /// [`RoomEkf::add_door`]).
+    pub fn placed_anew(&self, pose: Pose2, pose_covariance: Matrix3<f64>, at: Stamp) -> Self {
+        let rows = self.shape.rows();
+        let n = 3 + rows;
+        let mut x = DVector::zeros(n);
+        let mut p = DMatrix::zeros(n, n);
+        x.rows_mut(0, 3)
+            .copy_from_slice(&[pose.x, pose.y, pose.theta]);
+        x.rows_mut(3, rows).copy_from(&self.x.rows(3, rows));
+        p.view_mut((0, 0), (3, 3)).copy_from(&pose_covariance);
+        let (_, now) = self.now();
+        p.view_mut((3, 3), (rows, rows))
+            .copy_from(&now.view((3, 3), (rows, rows)));
+        Self::in_shape(self.config.clone(), self.shape.clone(), x, p, at)
+    }
+
     /// The estimate at the last scan, and when that was.
     pub fn at_last_scan(&self) -> (&DVector<f64>, &DMatrix<f64>, Stamp) {
         (&self.x, &self.p, self.at)

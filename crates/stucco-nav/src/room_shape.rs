@@ -327,6 +327,35 @@ impl RoomShape {
         self.along(x, q).dot(&p.coords)
     }
 
+    /// A door's position `s` along wall `q` in state `x` measured instead
+    /// from the wall's first corner toward its second (as plans and
+    /// reports give it; a rectangle's positions are the same both ways).
+    pub fn from_first_corner(&self, x: &DVector<f64>, q: usize, s: f64) -> f64 {
+        if !self.polygon {
+            return s;
+        }
+        let (a, dir) = self.first_corner(x, q);
+        (self.door_centre(x, q, s).0 - a).dot(&dir)
+    }
+
+    /// The inverse of [`RoomShape::from_first_corner`]: the position in
+    /// the state of a door `m` from wall `q`'s first corner.
+    pub fn to_state(&self, x: &DVector<f64>, q: usize, m: f64) -> f64 {
+        if !self.polygon {
+            return m;
+        }
+        let (a, dir) = self.first_corner(x, q);
+        self.position_along(x, q, &Point2::from(a + dir * m))
+    }
+
+    /// Wall `q`'s first corner in state `x` and its direction toward the
+    /// second.
+    fn first_corner(&self, x: &DVector<f64>, q: usize) -> (Vector2<f64>, Vector2<f64>) {
+        let (n, _) = self.line(x, q);
+        let corners = self.corners(x);
+        (Vector2::from(corners[q]), Vector2::new(-n.y, n.x))
+    }
+
     /// The wall of the shape nearest `p` in state `x` within `within_m`
     /// (its distance to the wall's stretch), if any.
     pub fn wall_at(&self, x: &DVector<f64>, p: &Point2<f64>, within_m: f64) -> Option<usize> {
@@ -446,6 +475,22 @@ mod tests {
             let (c3, _, _) = shape.door_centre(&x, q, 1.3 + 1e-7);
             assert!(((c3 - c) / 1e-7 - ds).norm() < 1e-5);
         }
+    }
+
+    #[test]
+    fn a_doors_position_from_its_walls_first_corner_comes_back() {
+        let shape = RoomShape::polygon(&ell(), 0.03).expect("an L");
+        let x = drawn_state(&shape, [1.0, 1.0, 0.0]);
+        // Wall 3 runs from (3.5, 2.5) up to (3.5, 5): a door 1 m along it
+        // is at (3.5, 3.5).
+        let s = shape.to_state(&x, 3, 1.0);
+        let (centre, _, _) = shape.door_centre(&x, 3, s);
+        assert!((centre - Vector2::new(3.5, 3.5)).norm() < 1e-12, "{centre}");
+        assert!((shape.from_first_corner(&x, 3, s) - 1.0).abs() < 1e-12);
+        // Wall 2 runs west from (6, 2.5).
+        let s = shape.to_state(&x, 2, 0.5);
+        let (centre, _, _) = shape.door_centre(&x, 2, s);
+        assert!((centre - Vector2::new(5.5, 2.5)).norm() < 1e-12, "{centre}");
     }
 
     #[test]

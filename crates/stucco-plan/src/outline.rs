@@ -6,6 +6,10 @@
 use nalgebra::{Point2, Vector2};
 use std::borrow::Cow;
 
+/// Shortest wall a room may have, m: a shorter one is a corner drawn
+/// twice.
+const SHORTEST_WALL_M: f64 = 0.05;
+
 /// A simple polygon, its corners counter-clockwise, m. It borrows the
 /// corners it is made of: asking a ceiling's outline whether a cell is
 /// plastered, cell after cell, copies nothing.
@@ -50,8 +54,8 @@ impl<'a> Outline<'a> {
     }
 
     /// Why the corners make no room, if they do not: fewer than three, a
-    /// number that is not finite, two walls that cross, or corners running
-    /// clockwise or enclosing nothing.
+    /// number that is not finite, a wall shorter than 5 cm, two walls that
+    /// cross, or corners running clockwise or enclosing nothing.
     pub fn fault(&self) -> Option<String> {
         let n = self.corners.len();
         if n < 3 {
@@ -65,6 +69,17 @@ impl<'a> Outline<'a> {
             return Some("a corner is not a finite number".into());
         }
         let edges: Vec<_> = self.edges().collect();
+        if let Some((k, (a, b))) = edges
+            .iter()
+            .enumerate()
+            .find(|(_, (a, b))| (b - a).norm() < SHORTEST_WALL_M)
+        {
+            return Some(format!(
+                "wall {k} is {:.3} m long: a wall is {SHORTEST_WALL_M} m or more (a corner drawn \
+                 twice?)",
+                (b - a).norm()
+            ));
+        }
         for i in 0..n {
             for j in i + 2..n {
                 if i == 0 && j == n - 1 {

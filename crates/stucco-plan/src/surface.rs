@@ -182,6 +182,23 @@ impl WallLine {
         })
     }
 
+    /// The walls of a room given by its `corners` (counter-clockwise, wall
+    /// `k` from corner `k`), or when there are none the rectangle
+    /// `size_m`'s four.
+    pub fn of_room(corners: &[[f64; 2]], size_m: [f64; 2]) -> Vec<WallLine> {
+        if corners.is_empty() {
+            WallName::ALL
+                .iter()
+                .filter_map(|&w| WallLine::of(w, size_m))
+                .collect()
+        } else {
+            let n = corners.len();
+            (0..n)
+                .map(|k| WallLine::between(corners[k], corners[(k + 1) % n]))
+                .collect()
+        }
+    }
+
     /// The wall from corner `a` to corner `b` of a room whose corners run
     /// counter-clockwise (the room on its left).
     pub fn between(a: [f64; 2], b: [f64; 2]) -> WallLine {
@@ -297,17 +314,7 @@ impl RoomModel {
     /// The room's walls, by index: a rectangle's four (west, south, east,
     /// north), or its polygon's edges.
     pub fn walls(&self) -> Vec<WallLine> {
-        if self.corners.is_empty() {
-            WallName::ALL
-                .iter()
-                .filter_map(|&w| WallLine::of(w, self.size_m))
-                .collect()
-        } else {
-            let n = self.corners.len();
-            (0..n)
-                .map(|k| WallLine::between(self.corners[k], self.corners[(k + 1) % n]))
-                .collect()
-        }
+        WallLine::of_room(&self.corners, self.size_m)
     }
 
     /// Wall `w`, when the room has it.

@@ -35,12 +35,19 @@ pub struct Estimate {
     pub position_sigma_m: f64,
     /// Standard deviation of the heading, rad.
     pub heading_sigma_rad: f64,
-    /// The room's size, `(xs, ys)`, m.
+    /// The room's size, `(xs, ys)`, m: a rectangle's, or the box of a
+    /// room of another shape (its corners within `[0, xs] × [0, ys]`).
     pub room_m: [f64; 2],
-    /// Its standard deviation, m.
+    /// Its standard deviation, m (a room of another shape: the least and
+    /// the greatest of its walls' offsets').
     pub room_sigma_m: [f64; 2],
+    /// A room that is not a rectangle: its corners, counter-clockwise,
+    /// wall `k` from corner `k` to corner `k + 1` (empty: the rectangle
+    /// `room_m`, walls 0–3 west, south, east, north).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub corners: Vec<[f64; 2]>,
     /// Scans each wall (in [`WallName::index`] order) has been used in.
-    pub walls_seen: [usize; 4],
+    pub walls_seen: Vec<usize>,
     /// The doors known.
     pub doors: Vec<DoorEstimate>,
     /// Height of the ceiling, m.

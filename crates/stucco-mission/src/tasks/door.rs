@@ -6,7 +6,7 @@ use super::ways::planned_way;
 use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::{EventKind, ExecutiveConfig};
-use crate::model::{DoorEstimate, Estimate, WallGeometry};
+use crate::model::{DoorEstimate, Estimate, WallGeometry, depth_from, depth_of_room};
 use std::collections::VecDeque;
 use stucco_core::{DriveCommand, Pose2, wrap_angle};
 
@@ -321,14 +321,10 @@ fn door_pass(
 ) -> Vec<Behaviour> {
     let v = &config.vehicle;
     let (rear, front) = (v.rear_overhang_m, v.front_m());
-    let Some(g) = WallGeometry::of(d.wall, est.room_m) else {
+    let Some(g) = WallGeometry::in_room(est, d.wall) else {
         return Vec::new();
     };
-    let depth = if g.along.x.abs() > 0.5 {
-        est.room_m[1]
-    } else {
-        est.room_m[0]
-    };
+    let depth = depth_from(est, &g);
     let out_heading = (-g.inward.y).atan2(-g.inward.x);
     // Already on the door's line, facing along the passage, the robot
     // needs no approach from further in than where it stands.
@@ -434,11 +430,7 @@ fn next_room_depth(config: &ExecutiveConfig, est: &Estimate, door: usize) -> Opt
     let floor = config.floor.as_ref()?;
     let next = floor.beyond(door, est.room?)?;
     let side = floor.side(door, next)?;
-    let size = floor.rooms().get(next)?.size_m;
-    let g = WallGeometry::of(side.wall, size)?;
-    Some(if g.along.x.abs() > 0.5 {
-        size[1]
-    } else {
-        size[0]
-    })
+    let room = floor.rooms().get(next)?;
+    let g = room.wall(side.wall)?;
+    Some(depth_of_room(&room.outline(), room.size_m, &g))
 }

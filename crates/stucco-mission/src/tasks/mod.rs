@@ -39,7 +39,7 @@ pub(crate) fn out_of_reach(
     est: &Estimate,
     config: &ExecutiveConfig,
 ) -> Option<String> {
-    use crate::model::{WallGeometry, wall_in};
+    use crate::model::{WallGeometry, depth_from, wall_in};
     let along = |key: &str, w, at: f64| match wall_in(est, w, spec.name()) {
         Err(e) => Some(e.to_string()),
         Ok(g) => (!(0.0..=g.length_m).contains(&at))
@@ -47,10 +47,7 @@ pub(crate) fn out_of_reach(
     };
     let standoff = |w, s: f64| {
         // The room across the wall, less the body's half width.
-        let across = match WallGeometry::of(w, est.room_m) {
-            Some(g) if g.along.x.abs() > 0.5 => est.room_m[1],
-            _ => est.room_m[0],
-        };
+        let across = WallGeometry::in_room(est, w).map_or(0.0, |g| depth_from(est, &g));
         (s > across - 0.5 * config.vehicle.width_m)
             .then(|| format!("standoff_m: {s:.2} m reaches past a {across:.2} m room"))
     };
@@ -67,8 +64,13 @@ pub(crate) fn out_of_reach(
                 Err(e) => return Some(e.to_string()),
             };
             let half = 0.5 * config.vehicle.width_m;
-            let inside = (half..=est.room_m[0] - half).contains(&goal.x)
-                && (half..=est.room_m[1] - half).contains(&goal.y);
+            let inside = if est.corners.is_empty() {
+                (half..=est.room_m[0] - half).contains(&goal.x)
+                    && (half..=est.room_m[1] - half).contains(&goal.y)
+            } else {
+                let outline = stucco_plan::Outline::new(&est.corners);
+                outline.contains(&goal.position()) && outline.clearance_m(&goal.position()) >= half
+            };
             (!inside).then(|| {
                 format!(
                     "the move ends at ({:.2}, {:.2}) m, outside the {:.2} × {:.2} m room (or                      within half the body's width of a wall)",
@@ -93,6 +95,7 @@ pub(crate) fn out_of_reach(
         } => along("at_m", *wall, *at_m).or_else(|| standoff(*wall, *standoff_m)),
         TaskSpec::Plaster { walls, .. } => walls
             .iter()
+            .flatten()
             .find_map(|&w| wall_in(est, w, spec.name()).err())
             .map(|e| e.to_string()),
         _ => None,

@@ -12,7 +12,7 @@ use super::{
 use crate::behaviour::{Behaviour, BehaviourKind};
 use crate::executive::{EventKind, ExecutiveConfig, PARK_NOZZLE_M};
 use crate::manoeuvre::{self, Space};
-use crate::model::{DoorEstimate, Estimate, WallGeometry};
+use crate::model::{DoorEstimate, Estimate, WallGeometry, walls_or_all};
 use crate::plaster::{Cursor, Phase, PlasterCoverage, PlasterProgress, PlasterRun, plan_digest};
 use crate::route::{Floor, route};
 use crate::task::{Region, SpraySettings, WallName, spray_with};
@@ -49,7 +49,8 @@ const LOOK_SPARE_M: f64 = 0.15;
 /// What a `plaster` task of the mission file asks for.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct PlasterSpec {
-    pub walls: Vec<WallName>,
+    /// The walls to plaster; `None`: every wall of the room.
+    pub walls: Option<Vec<WallName>>,
     pub ceiling: bool,
     pub speed_mps: f64,
     pub settle_s: f64,
@@ -63,6 +64,9 @@ pub(crate) struct PlasterSpec {
 #[derive(Clone, Debug)]
 pub(crate) struct Plaster {
     spec: PlasterSpec,
+    /// The walls it plasters: the spec's, or every wall of the room it
+    /// started in.
+    walls: Vec<WallName>,
     ways: Behaviours,
     /// The survey's loop driven corner to corner.
     legs: Option<Legs>,
@@ -82,6 +86,7 @@ pub(crate) struct Plaster {
 impl Plaster {
     pub fn new(spec: PlasterSpec) -> Self {
         Plaster {
+            walls: spec.walls.clone().unwrap_or_default(),
             spec,
             ways: Behaviours::default(),
             legs: None,
@@ -109,12 +114,13 @@ impl Task for Plaster {
             _ => None,
         };
         let resumed = thaw.as_ref().is_some_and(|t| t.progress.task == index);
+        self.walls = walls_or_all(s.walls.as_deref(), est);
         let mut run = plaster_run(
             config,
             self.tool.as_ref(),
             thaw,
             index,
-            (&s.walls, s.ceiling, s.region.as_ref()),
+            (&self.walls, s.ceiling, s.region.as_ref()),
             est,
         )?;
         cx.emit(EventKind::PlanMade {
@@ -144,7 +150,7 @@ impl Task for Plaster {
         let (config, est) = (cx.config, cx.est);
         let (speed, settle) = (self.spec.speed_mps, self.spec.settle_s);
         let (walls, ceiling, region) = (
-            &self.spec.walls[..],
+            &self.walls[..],
             self.spec.ceiling,
             self.spec.region.as_ref(),
         );
@@ -666,7 +672,7 @@ fn edge_looks(
         .iter()
         .filter(|w| w.sill_head_m[0] > DOOR_SILL_M)
     {
-        let Some(g) = WallGeometry::of(w.wall, est.room_m) else {
+        let Some(g) = WallGeometry::in_room(est, w.wall) else {
             continue;
         };
         for k in 0..2 {
@@ -804,7 +810,7 @@ fn plan_room(
     // A region of one wall: the rest of that wall is kept out of the plan
     // as openings are (its edges get the tool's margin).
     if let (Some(r), [wall]) = (region, walls) {
-        let length = WallGeometry::of(*wall, est.room_m).map_or(0.0, |g| g.length_m);
+        let length = WallGeometry::in_room(est, *wall).map_or(0.0, |g| g.length_m);
         let (a, z, h) = (r.along_m, r.height_m, est.height_m);
         let keep_out = [
             ([0.0, a[0]], [0.0, h]),
@@ -826,7 +832,7 @@ fn plan_room(
     }
     let room = RoomModel {
         size_m: est.room_m,
-        corners: Vec::new(),
+        corners: est.corners.clone(),
         height_m: est.height_m,
         openings,
         obstacles: est.obstacles.clone(),
@@ -953,6 +959,7 @@ fn plaster_space<'a>(config: &'a ExecutiveConfig, run: &'a PlasterRun, speed: f6
         .collect();
     Space::new(
         run.plan.room.size_m,
+        &run.plan.room.corners,
         &doors,
         &run.plan.room.obstacles,
         &config.vehicle,

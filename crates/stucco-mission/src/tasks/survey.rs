@@ -5,7 +5,7 @@ use super::ways::{planned_way, way};
 use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::ExecutiveConfig;
-use crate::model::Estimate;
+use crate::model::{Estimate, walls_or_all};
 use crate::task::WallName;
 use stucco_core::{DriveCommand, Pose2, VehicleSpec};
 
@@ -18,7 +18,8 @@ const LOOK_ROUND_S: f64 = 6.0;
 #[derive(Clone, Debug)]
 pub(crate) struct MapRoom {
     path: Option<Vec<[f64; 2]>>,
-    walls: Vec<WallName>,
+    /// The walls to observe; `None`: every wall of the room.
+    walls: Option<Vec<WallName>>,
     min_sightings: usize,
     inset_m: f64,
     speed_mps: f64,
@@ -32,7 +33,7 @@ pub(crate) struct MapRoom {
 impl MapRoom {
     pub fn new(
         path: Option<Vec<[f64; 2]>>,
-        walls: Vec<WallName>,
+        walls: Option<Vec<WallName>>,
         min_sightings: usize,
         inset_m: f64,
         speed_mps: f64,
@@ -82,7 +83,7 @@ impl Task for MapRoom {
         let elapsed = cx.elapsed_s();
         let (timeout_s, max_size_sigma_m, speed_mps) =
             (self.timeout_s, self.max_size_sigma_m, self.speed_mps);
-        let walls = &self.walls;
+        let walls = &walls_or_all(self.walls.as_deref(), est);
         let unseen: Vec<WallName> = walls
             .iter()
             .copied()

@@ -16,6 +16,7 @@ pub(crate) fn estimate_space<'a>(
 ) -> Space<'a> {
     Space::new(
         est.room_m,
+        &est.corners,
         &est.doors,
         &est.obstacles,
         &config.vehicle,
