@@ -38,11 +38,16 @@ pub struct BuildingRow {
 }
 
 /// Generates the buildings of `seeds` into `out/seed-N` and runs each
-/// one's job there, in parallel.
-pub fn run_buildings(seeds: std::ops::Range<u64>, out: &Path) -> Result<Vec<BuildingRow>> {
+/// one's job there, in parallel; each stopped after `stop_after_s` of
+/// simulated time when given (its outcome then `stopped`).
+pub fn run_buildings(
+    seeds: std::ops::Range<u64>,
+    out: &Path,
+    stop_after_s: Option<f64>,
+) -> Result<Vec<BuildingRow>> {
     seeds
         .into_par_iter()
-        .map(|seed| run_building(seed, &out.join(format!("seed-{seed}"))))
+        .map(|seed| run_building(seed, &out.join(format!("seed-{seed}")), stop_after_s))
         .collect()
 }
 
@@ -62,7 +67,7 @@ pub fn write_building(b: &stucco_sim::Building, dir: &Path) -> Result<()> {
     Ok(())
 }
 
-fn run_building(seed: u64, dir: &Path) -> Result<BuildingRow> {
+fn run_building(seed: u64, dir: &Path, stop_after_s: Option<f64>) -> Result<BuildingRow> {
     let b = stucco_sim::generate(seed);
     write_building(&b, dir)?;
     let mut row = BuildingRow {
@@ -84,7 +89,7 @@ fn run_building(seed: u64, dir: &Path) -> Result<BuildingRow> {
         runs: None,
         out: Some(dir.join("job")),
         resume: false,
-        stop_after_s: None,
+        stop_after_s,
         record: false,
     };
     match run_task_mission(&job, &|_, _| {}) {

@@ -284,6 +284,10 @@ enum Command {
         /// Folder for the buildings and their jobs (`DIR/seed-N`).
         #[arg(long)]
         out: PathBuf,
+        /// Stop each job after this many simulated seconds (as if switched
+        /// off: its outcome `stopped`, its scores as far as it got).
+        #[arg(long)]
+        stop_after: Option<f64>,
         /// Print the rows as one JSON array on stdout.
         #[arg(long)]
         json: bool,
@@ -1461,8 +1465,9 @@ fn main() -> ExitCode {
             from,
             count,
             out,
+            stop_after,
             json,
-        } => match stucco_cli::run_buildings(from..from.saturating_add(count), &out) {
+        } => match stucco_cli::run_buildings(from..from.saturating_add(count), &out, stop_after) {
             Ok(rows) if json => print_json(&rows),
             Ok(rows) => {
                 print!("{}", stucco_cli::buildings_table(&rows));

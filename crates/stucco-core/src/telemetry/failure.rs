@@ -270,7 +270,12 @@ impl std::fmt::Display for TaskFailure {
                 1e3 * sigma_m
             ),
             TaskFailure::WallsNotSeen { walls, timeout_s } => {
-                write!(f, "map_room: walls {walls:?} not seen in {timeout_s} s")
+                let names: Vec<String> = walls.iter().map(|w| w.index().to_string()).collect();
+                write!(
+                    f,
+                    "map_room: walls {} not seen in {timeout_s} s",
+                    names.join(", ")
+                )
             }
             TaskFailure::NoWayToCorners => {
                 write!(f, "map_room: no clear way reaches any corner of the loop")

@@ -2,7 +2,10 @@
 //! and the loops a plastering survey drives round a room.
 
 use super::ways::{planned_way, way};
-use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
+use super::{
+    Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw,
+    pivot_clearance,
+};
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::ExecutiveConfig;
 use crate::model::{Estimate, walls_or_all};
@@ -58,7 +61,8 @@ impl Task for MapRoom {
     fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
         let speed_mps = self.speed_mps;
-        let corners = survey_loop(self.path.as_deref(), self.inset_m, est.room_m)?;
+        let end = pivot_clearance(config);
+        let corners = survey_loop(self.path.as_deref(), self.inset_m, est.room_m, end)?;
         if turns_on_the_move(&corners, est.room_m, &config.vehicle) {
             let loop_ = closed(&corners);
             let (a, b) = (loop_[0], loop_[1]);
@@ -120,8 +124,13 @@ impl Task for MapRoom {
                 return TaskStep::Drive(DriveCommand::STOP);
             }
             // Corner to corner: done at any corner once the walls
-            // are known.
-            if unseen.is_empty() && loose.is_empty() {
+            // are known; with the building's drawing, once round the
+            // loop, what the laser could not see from it (a corridor's
+            // end wall behind a robot that cannot turn there) taken as
+            // drawn.
+            if (unseen.is_empty() && loose.is_empty())
+                || (config.floor.is_some() && legs.once_round())
+            {
                 return TaskStep::Done;
             }
             if legs.stuck() {
@@ -141,7 +150,12 @@ impl Task for MapRoom {
             }
             // Another loop, from where the last one ended: each one
             // sees the walls again.
-            match survey_loop(self.path.as_deref(), self.inset_m, est.room_m) {
+            match survey_loop(
+                self.path.as_deref(),
+                self.inset_m,
+                est.room_m,
+                pivot_clearance(config),
+            ) {
                 Ok(l) => {
                     let gains = &config.gains;
                     let l = closed(&l);
@@ -201,6 +215,8 @@ pub(crate) struct Legs {
     pub(crate) under_way: Option<usize>,
     /// Times the leg under way was planned again.
     replans: usize,
+    /// Legs a clear way reached the corner of.
+    reached: usize,
     /// Legs in a row that no clear way reached.
     unreached: usize,
     speed_mps: f64,
@@ -214,9 +230,16 @@ impl Legs {
             count,
             under_way: None,
             replans: 0,
+            reached: 0,
             unreached: 0,
             speed_mps,
         }
+    }
+
+    /// True when as many legs have reached their corners as there are
+    /// corners.
+    pub(crate) fn once_round(&self) -> bool {
+        self.reached >= self.corners.len()
     }
 
     /// True when no clear way reached any corner the last time round.
@@ -244,12 +267,13 @@ impl Legs {
             self.corners = corners.to_vec();
         }
         let way = self.leg(config, est, next);
-        self.unreached = if way.is_empty() {
-            self.unreached + 1
+        if way.is_some() {
+            self.unreached = 0;
+            self.reached += 1;
         } else {
-            0
-        };
-        Some(way)
+            self.unreached += 1;
+        }
+        Some(way.unwrap_or_default())
     }
 
     /// The leg under way planned again (something the map did not hold
@@ -262,22 +286,40 @@ impl Legs {
         let k = self.under_way?;
         (self.replans < MAX_REPLANS).then(|| {
             self.replans += 1;
-            self.leg(config, est, k)
+            self.leg(config, est, k).unwrap_or_default()
         })
     }
 
     /// Leg `leg`: to corner `leg` (modulo their number), arriving faced to
-    /// the next, by the planned way.
-    fn leg(&self, config: &ExecutiveConfig, est: &Estimate, leg: usize) -> Vec<Behaviour> {
+    /// the next, by the planned way; where no way arrives so, faced away
+    /// from it (the next leg is backed: a corridor's end where the robot
+    /// cannot turn). A robot already at the corner needs no way (the
+    /// corner is where the walls are looked at from, a few centimetres
+    /// either way alike): an empty one. `None`: no clear way.
+    fn leg(&self, config: &ExecutiveConfig, est: &Estimate, leg: usize) -> Option<Vec<Behaviour>> {
         let n = self.corners.len();
         if n == 0 {
-            return Vec::new();
+            return None;
         }
         let (a, b) = (self.corners[leg % n], self.corners[(leg + 1) % n]);
-        let goal = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
-        planned_way(config, est, &est.pose, &goal, self.speed_mps).map_or_else(Vec::new, |w| w.1)
+        if (est.pose.position().coords - nalgebra::Vector2::from(a)).norm() <= AT_CORNER_M {
+            return Some(Vec::new());
+        }
+        let toward = (b[1] - a[1]).atan2(b[0] - a[0]);
+        [
+            toward,
+            stucco_core::wrap_angle(toward + std::f64::consts::PI),
+        ]
+        .into_iter()
+        .find_map(|heading| {
+            let goal = Pose2::new(a[0], a[1], heading);
+            planned_way(config, est, &est.pose, &goal, self.speed_mps).map(|w| w.1)
+        })
     }
 }
+
+/// A robot this near a loop's corner is at it, m.
+const AT_CORNER_M: f64 = 0.1;
 
 /// A look at every wall before the plan is made again on what the camera
 /// found: one loop round the room, clockwise so the camera (looking left)
@@ -454,18 +496,19 @@ fn survey_rect(
 /// Least distance a default loop keeps from the walls, m: the body's half
 /// width and a protective field's margin.
 const LOOP_WALL_MIN_M: f64 = 0.5;
-/// How far apart the two sides of a default loop squeezed into a narrow
-/// room stand, m.
+/// How much wider than its body and its field's margins either side a
+/// room must be for a default loop in it, m.
 const NARROW_LOOP_M: f64 = 0.1;
 
 /// The survey loop: the given path or a rectangle `inset_m` inside the
-/// room; in a room narrower than twice that (a hall, a corridor), a
-/// rectangle along its middle, `NARROW_LOOP_M` across, driven corner to
-/// corner.
+/// room; in a room narrower than twice that (a hall, a corridor), its
+/// middle line from `end_m` off one end to `end_m` off the other, driven
+/// there and back.
 fn survey_loop(
     path: Option<&[[f64; 2]]>,
     inset_m: f64,
     room_m: [f64; 2],
+    end_m: f64,
 ) -> Result<Vec<[f64; 2]>, TaskFailure> {
     if let Some(p) = path {
         return Ok(p.to_vec());
@@ -481,7 +524,17 @@ fn survey_loop(
         if narrow < LOOP_WALL_MIN_M || 2.0 * narrow >= xs.max(ys) {
             return Err(TaskFailure::NoLoop { inset_m, room_m });
         }
-        narrow
+        // Along its middle, end to end and back: a leg across a room
+        // this narrow would stand the body across it, which it cannot.
+        // Each end `end_m` from the end wall, where the body and its
+        // field fit facing it.
+        let mid = [0.5 * xs, 0.5 * ys];
+        let end = end_m.max(narrow).min(0.5 * xs.max(ys));
+        return Ok(if xs >= ys {
+            vec![[end, mid[1]], [xs - end, mid[1]]]
+        } else {
+            vec![[mid[0], end], [mid[0], ys - end]]
+        });
     };
     Ok(vec![
         [inset_m, inset_m],
@@ -529,27 +582,26 @@ mod tests {
     #[test]
     fn the_default_loop_squeezes_into_a_hall_and_gives_up_where_the_body_cannot_pass() {
         // A room: the loop 1 m inside its walls.
-        let open = survey_loop(None, 1.0, [5.0, 4.0]).unwrap_or_default();
+        let open = survey_loop(None, 1.0, [5.0, 4.0], 1.0).unwrap_or_default();
         assert_eq!(open, [[1.0, 1.0], [4.0, 1.0], [4.0, 3.0], [1.0, 3.0]]);
-        // A 1.6 m hall: along its middle, 10 cm across.
-        let hall = survey_loop(None, 1.0, [5.5, 1.6]).unwrap_or_default();
-        assert_eq!(hall.len(), 4);
-        for [x, y] in hall {
-            assert!((0.75 - 1e-9..=4.75 + 1e-9).contains(&x), "{x}");
-            assert!((y - 0.75).abs() < 1e-9 || (y - 0.85).abs() < 1e-9, "{y}");
-        }
+        // A 1.6 m hall: its middle line, each end 1 m off the end wall (a
+        // leg across it would stand the body across the hall).
+        let hall = survey_loop(None, 1.0, [5.5, 1.6], 1.0).unwrap_or_default();
+        assert_eq!(hall, [[1.0, 0.8], [4.5, 0.8]]);
+        let upright = survey_loop(None, 1.0, [1.6, 5.5], 1.0).unwrap_or_default();
+        assert_eq!(upright, [[0.8, 1.0], [0.8, 4.5]]);
         // Narrower than the body and its field: no loop.
         assert!(matches!(
-            survey_loop(None, 1.0, [5.0, 1.0]),
+            survey_loop(None, 1.0, [5.0, 1.0], 1.0),
             Err(TaskFailure::NoLoop { .. })
         ));
         // A small inset asked for in a room that leaves it is kept.
-        let near = survey_loop(None, 0.3, [5.0, 4.0]).unwrap_or_default();
+        let near = survey_loop(None, 0.3, [5.0, 4.0], 1.0).unwrap_or_default();
         assert_eq!(near[0], [0.3, 0.3]);
         // A loop given is driven as given.
         let given = [[0.5, 0.5], [1.0, 0.5]];
         assert_eq!(
-            survey_loop(Some(&given), 1.0, [1.2, 1.2]).unwrap_or_default(),
+            survey_loop(Some(&given), 1.0, [1.2, 1.2], 1.0).unwrap_or_default(),
             given
         );
     }
