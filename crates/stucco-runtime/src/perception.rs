@@ -1247,6 +1247,11 @@ mod tests {
         let sim = Simulator::new(&world, cfg, Some(seed));
         let perception =
             Perception::new(&spec, x0, [0.01, 0.01], sim.now()).expect("valid settings");
+        (idle_robot(sim, perception, &spec), start)
+    }
+
+    /// A robot on `sim` with `perception` whose executive idles.
+    fn idle_robot(sim: Simulator, perception: Perception, spec: &RobotSpec) -> Robot<Simulator> {
         let idle = stucco_mission::Executive::new(
             stucco_mission::ExecutiveConfig {
                 vehicle: spec.vehicle.clone(),
@@ -1260,7 +1265,7 @@ mod tests {
             Vec::new(),
         );
         let limiter = stucco_control::Limiter::new(&spec.vehicle);
-        (Robot::new(sim, perception, idle, limiter), start)
+        Robot::new(sim, perception, idle, limiter)
     }
 
     /// An L-shaped room of 6 × 5 m less a 2.5 × 2.5 m notch, its drawing
@@ -1317,20 +1322,7 @@ mod tests {
         perception
             .keep_room_drawn(&drawn, 0.02)
             .expect("the drawing's corners");
-        let idle = stucco_mission::Executive::new(
-            stucco_mission::ExecutiveConfig {
-                vehicle: spec.vehicle.clone(),
-                gains: stucco_control::GainSchedule::default(),
-                safety: stucco_mission::SafetyConfig::default(),
-                unattended: true,
-                spray: None,
-                floor: None,
-                body_camera_azimuth_rad: None,
-            },
-            Vec::new(),
-        );
-        let limiter = stucco_control::Limiter::new(&spec.vehicle);
-        let mut robot = Robot::new(sim, perception, idle, limiter);
+        let mut robot = idle_robot(sim, perception, &spec);
         // A gentle left curve into the room's wide part, a stop, a pivot.
         let mut truth = start;
         for k in 0..600 {
