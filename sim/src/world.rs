@@ -405,7 +405,7 @@ impl WorldSpec {
 }
 
 /// Twice the signed area of a polygon (positive when counter-clockwise).
-fn signed_area(c: &[[f64; 2]]) -> f64 {
+pub(crate) fn signed_area(c: &[[f64; 2]]) -> f64 {
     (0..c.len())
         .map(|i| {
             let (a, b) = (c[i], c[(i + 1) % c.len()]);

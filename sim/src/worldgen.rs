@@ -23,6 +23,14 @@ const WALL_M: f64 = 0.15;
 /// The corridor's name in the world and on the drawing.
 pub const CORRIDOR: &str = "corridor";
 
+/// Time a generated job is given a square metre of its rooms' walls and
+/// ceilings, s: about three times what the apartment's job takes (52 s a
+/// square metre of plasterable surface, mapping and driving included), so
+/// a job is cut short only when far slower than that.
+const JOB_SECONDS_PER_M2: f64 = 150.0;
+/// Least time a generated job is given, s (a mission's default).
+const MIN_JOB_S: f64 = 1800.0;
+
 /// A generated building: its world (the truth), its drawing, and a job.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Building {
@@ -686,6 +694,8 @@ impl Building {
              world = \"world.toml\"\n\
              plan = \"plan.toml\"\n\
              seed = {seed}\n\
+             # The job's time, {per_m2} s a square metre of its {area:.0} m² of walls and ceilings.\n\
+             time_limit_s = {limit:.0}\n\
              \n\
              [start]\n\
              room = \"{CORRIDOR}\"\n\
@@ -695,7 +705,29 @@ impl Building {
              [[task]]\n\
              task = \"plaster\"\n\
              rooms = \"all\"\n",
-            seed = self.seed
+            seed = self.seed,
+            per_m2 = JOB_SECONDS_PER_M2,
+            area = self.surface_m2(),
+            limit = (JOB_SECONDS_PER_M2 * self.surface_m2()).max(MIN_JOB_S),
         )
+    }
+
+    /// The area of its rooms' walls and ceilings, openings included, m².
+    pub fn surface_m2(&self) -> f64 {
+        self.world
+            .rooms
+            .iter()
+            .map(|r| {
+                let n = r.corners.len();
+                let perimeter: f64 = (0..n)
+                    .map(|k| {
+                        let (a, b) = (r.corners[k], r.corners[(k + 1) % n]);
+                        (b[0] - a[0]).hypot(b[1] - a[1])
+                    })
+                    .sum();
+                // (The helper's area is twice the polygon's.)
+                perimeter * r.height_m + 0.5 * crate::world::signed_area(&r.corners)
+            })
+            .sum()
     }
 }
