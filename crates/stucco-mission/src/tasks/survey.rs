@@ -124,13 +124,8 @@ impl Task for MapRoom {
                 return TaskStep::Drive(DriveCommand::STOP);
             }
             // Corner to corner: done at any corner once the walls
-            // are known; with the building's drawing, once round the
-            // loop, what the laser could not see from it (a corridor's
-            // end wall behind a robot that cannot turn there) taken as
-            // drawn.
-            if (unseen.is_empty() && loose.is_empty())
-                || (config.floor.is_some() && legs.once_round())
-            {
+            // are known.
+            if unseen.is_empty() && loose.is_empty() {
                 return TaskStep::Done;
             }
             if legs.stuck() {
@@ -215,8 +210,6 @@ pub(crate) struct Legs {
     pub(crate) under_way: Option<usize>,
     /// Times the leg under way was planned again.
     replans: usize,
-    /// Legs a clear way reached the corner of.
-    reached: usize,
     /// Legs in a row that no clear way reached.
     unreached: usize,
     speed_mps: f64,
@@ -230,16 +223,9 @@ impl Legs {
             count,
             under_way: None,
             replans: 0,
-            reached: 0,
             unreached: 0,
             speed_mps,
         }
-    }
-
-    /// True when as many legs have reached their corners as there are
-    /// corners.
-    pub(crate) fn once_round(&self) -> bool {
-        self.reached >= self.corners.len()
     }
 
     /// True when no clear way reached any corner the last time round.
@@ -269,7 +255,6 @@ impl Legs {
         let way = self.leg(config, est, next);
         if way.is_some() {
             self.unreached = 0;
-            self.reached += 1;
         } else {
             self.unreached += 1;
         }
