@@ -462,8 +462,15 @@ impl RoomEkf {
             let r = wall.covariance + floor;
             let (l, dl) = laser_pose(&x, &self.config.laser_mount);
             let ends = wall.ends.map(|e| l.transform_point(&e));
+            // A polygon's corners as the state has them now (a rectangle
+            // needs none).
+            let corners = if self.shape.is_polygon() {
+                self.shape.corners(&x)
+            } else {
+                Vec::new()
+            };
             let best = (0..self.shape.len())
-                .filter(|&q| self.shape.may_see(&x, q, &l, ends))
+                .filter(|&q| self.shape.may_see(&x, &corners, q, &l, ends))
                 .filter_map(|q| {
                     let (z_hat, h) = self.shape.observe_from(&x, q, &l, dl);
                     innovation(&p, &z, &z_hat, &h, &r, true).map(|m| (q, m, h))

@@ -244,10 +244,18 @@ impl RoomShape {
     }
 
     /// Whether the stretch `ends` (room frame) seen from the laser at `l`
-    /// may be wall `q` in state `x`: on the wall's inner side, and
+    /// may be wall `q` in state `x` (`corners` its [`RoomShape::corners`],
+    /// worked out once for all the walls): on the wall's inner side, and
     /// overlapping its stretch between its corners. A rectangle's walls
     /// take anything (each spans its side of the room).
-    pub fn may_see(&self, x: &DVector<f64>, q: usize, l: &Pose2, ends: [Point2<f64>; 2]) -> bool {
+    pub fn may_see(
+        &self,
+        x: &DVector<f64>,
+        corners: &[[f64; 2]],
+        q: usize,
+        l: &Pose2,
+        ends: [Point2<f64>; 2],
+    ) -> bool {
         if !self.polygon {
             return true;
         }
@@ -256,7 +264,6 @@ impl RoomShape {
             return false;
         }
         let t = Vector2::new(-n.y, n.x);
-        let corners = self.corners(x);
         let k1 = (q + 1) % self.walls.len();
         let [a, b] = [corners[q], corners[k1]].map(|c| t.dot(&Vector2::from(c)));
         let [u, v] = ends.map(|e| t.dot(&e.coords));
@@ -422,13 +429,14 @@ mod tests {
         // The notch's wall y = 2.5 (wall 2), x from 3.5 to 6.
         let l = Pose2::new(1.0, 1.0, 0.0);
         let seg = |a: [f64; 2], b: [f64; 2]| [Point2::from(a), Point2::from(b)];
-        assert!(shape.may_see(&x, 2, &l, seg([4.0, 2.5], [5.5, 2.5])));
+        let c = shape.corners(&x);
+        assert!(shape.may_see(&x, &c, 2, &l, seg([4.0, 2.5], [5.5, 2.5])));
         // The far wall y = 5 left of the notch, in the notch wall's line
         // of sight but off its stretch.
-        assert!(!shape.may_see(&x, 2, &l, seg([0.5, 5.0], [3.0, 5.0])));
+        assert!(!shape.may_see(&x, &c, 2, &l, seg([0.5, 5.0], [3.0, 5.0])));
         // From above the notch's line the notch wall faces away.
         let above = Pose2::new(1.0, 4.0, 0.0);
-        assert!(!shape.may_see(&x, 2, &above, seg([4.0, 2.5], [5.5, 2.5])));
+        assert!(!shape.may_see(&x, &c, 2, &above, seg([4.0, 2.5], [5.5, 2.5])));
     }
 
     #[test]
