@@ -98,6 +98,9 @@ pub(crate) struct PlasterRun {
     /// Stations of this plan given up, and the area only they reached,
     /// m².
     pub given_up: (usize, f64),
+    /// How long the spray has been held at this station for a position
+    /// known too loosely to spray on, s (0 while it sprays).
+    pub held_s: f64,
 }
 
 impl PlasterRun {
@@ -113,6 +116,7 @@ impl PlasterRun {
             unsaved_s: 0.0,
             way_unchecked: false,
             given_up: (0, 0.0),
+            held_s: 0.0,
         }
     }
 

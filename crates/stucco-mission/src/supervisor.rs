@@ -68,7 +68,8 @@ pub struct SafetyConfig {
     pub max_heading_sigma_rad: f64,
     /// What to do then.
     pub on_lost: LostPolicy,
-    /// How long `hold` waits for the estimate, s.
+    /// How long `hold` waits for the estimate, and a plastering station
+    /// for it to come within `spray_max_sigma_m`, s.
     pub lost_timeout_s: f64,
     /// Spraying only with the position known to this, m (σ).
     pub spray_max_sigma_m: f64,
@@ -152,6 +153,9 @@ pub struct Supervisor {
     /// Seconds the field has been clear since it last held something.
     clear_for_s: f64,
     lost: bool,
+    /// The last obstacle point that held a command, and whether it was
+    /// backing.
+    last_block: Option<(Point2<f64>, bool)>,
 }
 
 impl Supervisor {
@@ -162,6 +166,7 @@ impl Supervisor {
             vehicle,
             clear_for_s: f64::INFINITY,
             lost: false,
+            last_block: None,
         }
     }
 
@@ -195,10 +200,16 @@ impl Supervisor {
     /// within its stopping distance (and the margin): forward, backward,
     /// on a curve or turning on the spot alike.
     pub fn blocked(&self, cmd: &DriveCommand, obstacles: &[Point2<f64>]) -> bool {
+        self.blocking(cmd, obstacles).is_some()
+    }
+
+    /// The obstacle point that blocks `cmd` (as [`Supervisor::blocked`]
+    /// tells), the first the body would meet along the arc; robot frame.
+    pub fn blocking(&self, cmd: &DriveCommand, obstacles: &[Point2<f64>]) -> Option<Point2<f64>> {
         let v = &self.vehicle;
         let c = &self.config;
         if cmd.speed_mps == 0.0 || obstacles.is_empty() {
-            return false;
+            return None;
         }
         let s = cmd.speed_mps.abs();
         // Front-wheel travel before a stop, and the margin.
@@ -216,14 +227,23 @@ impl Supervisor {
         let steps = ((travel / 0.05).max(travel * turn.abs() / 0.05).ceil() as usize).max(1);
         let ds = travel / steps as f64;
         let twist = Twist2::new(forward, 0.0, turn);
-        (1..=steps).any(|k| {
+        (1..=steps).find_map(|k| {
             let pose = Pose2::default().advanced(&twist, ds * k as f64);
             let inv = pose.inverse();
-            obstacles.iter().any(|p| {
-                let q = inv.transform_point(p);
-                q.x >= back && q.x <= front && q.y.abs() <= half
-            })
+            obstacles
+                .iter()
+                .find(|p| {
+                    let q = inv.transform_point(p);
+                    q.x >= back && q.x <= front && q.y.abs() <= half
+                })
+                .copied()
         })
+    }
+
+    /// What blocked the last command held for an obstacle (robot frame,
+    /// at the time), and whether that command was backing.
+    pub fn last_block(&self) -> Option<(Point2<f64>, bool)> {
+        self.last_block
     }
 
     /// Checks `cmd` against the obstacles seen and the estimate; `dt_s`
@@ -245,8 +265,14 @@ impl Supervisor {
                 hazard: Some(Hazard::Lost),
             };
         }
-        if self.blocked(&cmd, obstacles) || (cmd.speed_mps < 0.0 && self.blocked(&cmd, unseen)) {
+        let block = self.blocking(&cmd, obstacles).or_else(|| {
+            (cmd.speed_mps < 0.0)
+                .then(|| self.blocking(&cmd, unseen))
+                .flatten()
+        });
+        if let Some(p) = block {
             self.clear_for_s = 0.0;
+            self.last_block = Some((p, cmd.speed_mps < 0.0));
         } else {
             self.clear_for_s += dt_s;
         }

@@ -547,6 +547,25 @@ fn an_obstacle_stops_the_robot_and_a_lasting_one_fails_the_task() {
     );
     assert!(matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("blocked")));
     assert!(kinds(&events).iter().any(|k| k == "safety_stop"));
+    // The failure says where the robot stood and what held it, in the
+    // room's frame: the person.
+    let failure = events
+        .iter()
+        .find_map(|e| match &e.kind {
+            EventKind::TaskFailed { failure, .. } => Some(failure.clone()),
+            _ => None,
+        })
+        .expect("the task failed");
+    let TaskFailure::WayBlocked {
+        pose,
+        obstacle_m: Some(held),
+        backing: false,
+    } = failure
+    else {
+        panic!("{failure:?}");
+    };
+    assert!((pose[0] - robot.pose.x).abs() < 1e-9, "{pose:?}");
+    assert!((held[0] - person.x).abs() < 1e-9 && (held[1] - person.y).abs() < 1e-9);
 }
 
 /// With nobody there, a touch (a person walking into the robot) holds it,
@@ -1469,6 +1488,56 @@ fn a_plaster_task_without_a_spray_tool_fails_saying_so() {
         panic!("{:?} {events:?}", exec.mode());
     };
     assert!(reason.contains("[spray]"), "{reason}");
+}
+
+/// A position the estimate keeps known only to 1.5 cm (the spray needs
+/// 1 cm): the robot gets to its first station, holds the spray there as
+/// long as the supervisor waits for a lost estimate, and then the task
+/// fails saying why, never having sprayed, instead of standing there for
+/// ever.
+#[test]
+fn a_station_held_for_a_loose_position_fails_the_task_after_the_timeout() {
+    let config = ExecutiveConfig {
+        spray: Some(stucco_plan::SprayTool::default()),
+        ..config(true)
+    };
+    let timeout_s = config.safety.lost_timeout_s;
+    let mut exec = Executive::new(config, vec![plaster(false)]);
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    robot.position_sigma = 0.015;
+    let (mut sprayed, mut t, mut started) = (false, 0.0, None);
+    for _ in 0..(900.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        sprayed |= out.tool.spray;
+        if started.is_none()
+            && out
+                .events
+                .iter()
+                .any(|e| matches!(e.kind, EventKind::StationStarted { .. }))
+        {
+            started = Some(t);
+        }
+        robot.drive(out.drive);
+        t += DT;
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert!(!sprayed, "sprayed on a position known to 1.5 cm");
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?}", exec.mode());
+    };
+    assert!(
+        reason.contains("known to 15.0 mm") && reason.contains("needs 10.0 mm"),
+        "{reason}"
+    );
+    // It waited the timeout at the station, and not much longer (the
+    // nozzle's travel to its first point).
+    let waited = t - started.expect("never got to a station");
+    assert!(
+        waited > timeout_s && waited < timeout_s + 10.0,
+        "{waited} s"
+    );
 }
 
 /// On the kinematic robot with a perfect estimate, a 5 × 3 m room: every

@@ -230,7 +230,12 @@ mod tests {
             },
             EventKind::TaskFailed {
                 task: 1,
-                reason: TaskFailure::WayBlocked.to_string(),
+                reason: TaskFailure::WayBlocked {
+                    pose: [1.0, 2.0, 90.0],
+                    obstacle_m: Some([1.0, 3.0]),
+                    backing: false,
+                }
+                .to_string(),
                 failure: TaskFailure::NoLoop {
                     inset_m: 0.45,
                     room_m: [3.2, 2.9],

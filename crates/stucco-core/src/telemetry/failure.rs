@@ -12,7 +12,18 @@ pub enum TaskFailure {
     /// The pose estimate was lost (past the supervisor's timeout).
     EstimateLost,
     /// The way stayed blocked past the supervisor's timeout.
-    WayBlocked,
+    WayBlocked {
+        /// Where the robot stood: x, y (m) and heading (deg), in its
+        /// room's frame.
+        #[serde(default)]
+        pose: [f64; 3],
+        /// What held it last, in the same frame, m.
+        #[serde(default)]
+        obstacle_m: Option<[f64; 2]>,
+        /// It was backing.
+        #[serde(default)]
+        backing: bool,
+    },
     /// The e-stop was pressed with no operator there.
     EStop,
     /// A bumper touched something with no operator there.
@@ -158,6 +169,18 @@ pub enum TaskFailure {
         /// The station.
         station: usize,
     },
+    /// `plaster`: at a station the position stayed known too loosely to
+    /// spray on for as long as the supervisor waits for the estimate.
+    PositionTooLoose {
+        /// The station.
+        station: usize,
+        /// The position's σ when the task gave up waiting, m.
+        sigma_m: f64,
+        /// The σ spraying needs (`spray_max_sigma_m`), m.
+        limit_m: f64,
+        /// How long it waited (`lost_timeout_s`), s.
+        waited_s: f64,
+    },
     /// `plaster`: the task's own spray settings do not make a tool.
     SpraySettings {
         /// Why.
@@ -170,7 +193,7 @@ impl TaskFailure {
     pub fn code(&self) -> &'static str {
         match self {
             TaskFailure::EstimateLost => "estimate_lost",
-            TaskFailure::WayBlocked => "way_blocked",
+            TaskFailure::WayBlocked { .. } => "way_blocked",
             TaskFailure::EStop => "e_stop",
             TaskFailure::Bumper => "bumper",
             TaskFailure::PassEndsAtCorner { .. } => "pass_ends_at_corner",
@@ -198,6 +221,7 @@ impl TaskFailure {
             TaskFailure::CheckpointPlanMissing { .. } => "checkpoint_plan_missing",
             TaskFailure::CheckpointPlanDiffers { .. } => "checkpoint_plan_differs",
             TaskFailure::NotFacingSurface { .. } => "not_facing_surface",
+            TaskFailure::PositionTooLoose { .. } => "position_too_loose",
             TaskFailure::SpraySettings { .. } => "spray_settings",
         }
     }
@@ -207,7 +231,21 @@ impl std::fmt::Display for TaskFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             TaskFailure::EstimateLost => write!(f, "the pose estimate is lost"),
-            TaskFailure::WayBlocked => write!(f, "the way stayed blocked"),
+            TaskFailure::WayBlocked {
+                pose: [x, y, deg],
+                obstacle_m,
+                backing,
+            } => {
+                let how = if *backing { "backing" } else { "driving" };
+                write!(
+                    f,
+                    "the way stayed blocked: {how} at ({x:.2}, {y:.2}) m heading {deg:.0}°"
+                )?;
+                match obstacle_m {
+                    Some([ox, oy]) => write!(f, ", held for an echo at ({ox:.2}, {oy:.2}) m"),
+                    None => Ok(()),
+                }
+            }
             TaskFailure::EStop => write!(f, "e-stop pressed"),
             TaskFailure::Bumper => write!(f, "bumper: the robot touched something"),
             TaskFailure::PassEndsAtCorner {
@@ -315,6 +353,18 @@ impl std::fmt::Display for TaskFailure {
             TaskFailure::NotFacingSurface { station } => write!(
                 f,
                 "plaster: the robot does not face the surface of station {station}"
+            ),
+            TaskFailure::PositionTooLoose {
+                station,
+                sigma_m,
+                limit_m,
+                waited_s,
+            } => write!(
+                f,
+                "plaster: at station {station} the position stayed known to {:.1} mm for \
+                 {waited_s} s; spraying needs {:.1} mm",
+                1e3 * sigma_m,
+                1e3 * limit_m
             ),
             TaskFailure::SpraySettings { error } => write!(f, "plaster: spray: {error}"),
         }

@@ -661,7 +661,17 @@ impl Executive {
                     }
                     *checkpoint_due |= std::mem::take(&mut self.effects.checkpoint);
                     if a.blocked_s > safety.blocked_timeout_s {
-                        self.fail(now, TaskFailure::WayBlocked);
+                        let pose = inputs.estimate.pose;
+                        let held = self.supervisor.last_block();
+                        let failure = TaskFailure::WayBlocked {
+                            pose: [pose.x, pose.y, pose.theta.to_degrees()],
+                            obstacle_m: held.map(|(p, _)| {
+                                let p = pose.transform_point(&p);
+                                [p.x, p.y]
+                            }),
+                            backing: held.is_some_and(|(_, b)| b),
+                        };
+                        self.fail(now, failure);
                         *checkpoint_due = true;
                     }
                 }

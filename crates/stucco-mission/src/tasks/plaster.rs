@@ -158,8 +158,8 @@ impl Task for Plaster {
         let gains = config.gains.clone();
         let clearance = pivot_clearance(config);
         let dt = cx.dt;
-        let spray_ok =
-            est.position_sigma_m <= config.safety.spray_max_sigma_m && cx.hazard.is_none();
+        let loose = est.position_sigma_m > config.safety.spray_max_sigma_m;
+        let spray_ok = !loose && cx.hazard.is_none();
         let index = cx.index;
         let Some(run) = self.run.as_mut() else {
             return TaskStep::Failed(TaskFailure::NoPlan);
@@ -392,6 +392,24 @@ impl Task for Plaster {
                 TaskStep::Drive(DriveCommand::STOP)
             }
             Phase::Spraying { in_move_s } => {
+                // Held for the estimate no longer than the supervisor
+                // holds a lost one: a position that stays too loose to
+                // spray on fails the task, saying so, instead of standing
+                // at the station for ever (a hazard's hold is the
+                // supervisor's to time).
+                run.held_s = if loose && cx.hazard.is_none() {
+                    run.held_s + dt
+                } else {
+                    0.0
+                };
+                if run.held_s > config.safety.lost_timeout_s {
+                    return TaskStep::Failed(TaskFailure::PositionTooLoose {
+                        station: run.cursor.station,
+                        sigma_m: est.position_sigma_m,
+                        limit_m: config.safety.spray_max_sigma_m,
+                        waited_s: config.safety.lost_timeout_s,
+                    });
+                }
                 let mut t = in_move_s + if spray_ok { dt } else { 0.0 };
                 // A checkpoint every second of spraying: a run killed
                 // mid-stroke takes it up within a second of where it
