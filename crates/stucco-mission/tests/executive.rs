@@ -1540,6 +1540,59 @@ fn a_station_held_for_a_loose_position_fails_the_task_after_the_timeout() {
     );
 }
 
+/// Held on the last stretch onto a station it already stands on within
+/// what the gantry has spare (something stays in the field ahead: a wall
+/// the station stands nearer than the field's margin), the robot takes
+/// the station from where it stands instead of waiting for a clear field
+/// until the way fails.
+#[test]
+fn a_robot_held_within_the_gantrys_spare_of_its_station_takes_it_from_there() {
+    let config = ExecutiveConfig {
+        spray: Some(stucco_plan::SprayTool::default()),
+        ..config(true)
+    };
+    let mut exec = Executive::new(config, vec![plaster(false)]);
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let (mut held, mut stopped) = (false, false);
+    let mut started = None;
+    for _ in 0..(300.0 / DT) as usize {
+        // Within 2 cm of the first station, driving: something shows up
+        // just past the field's edge in the way it drives, and stays.
+        let base = exec.plaster_plan().map(|p| p.stations[0].base);
+        let near = base.is_some_and(|b| (b.inverse() * robot.pose).x.abs() < 0.02);
+        held |= near && started.is_none();
+        let seen: Vec<Point2<f64>> = if held && started.is_none() {
+            // Ahead and behind, inside the body's width: the field holds
+            // any run along the lane.
+            vec![Point2::new(0.85, 0.0), Point2::new(-0.25, 0.0)]
+        } else {
+            Vec::new()
+        };
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        stopped |= exec.hazard() == Some(Hazard::Obstacle);
+        for e in &out.events {
+            if let EventKind::StationStarted {
+                station: 0,
+                offset_m,
+                ..
+            } = e.kind
+            {
+                started = Some(offset_m);
+            }
+        }
+        robot.drive(out.drive);
+        if started.is_some() || exec.mode().is_final() {
+            break;
+        }
+    }
+    assert!(held && stopped, "never held near the station");
+    let offset = started.unwrap_or_else(|| panic!("{:?}", exec.mode()));
+    assert!(
+        offset[0].abs() <= 0.03 && offset[1].abs() <= 0.03,
+        "{offset:?}"
+    );
+}
+
 /// On the kinematic robot with a perfect estimate, a 5 × 3 m room: every
 /// pass of the plan is sprayed, the nozzle only ever within the gantry's
 /// travel and spraying only while standing, a checkpoint due at least

@@ -40,6 +40,10 @@ pub struct Perception {
     obstacles: Vec<Point2<f64>>,
     /// Echoes of earlier scans, for what the laser no longer sees.
     echoes: EchoMemory,
+    /// How far the laser's echoes of a wall scatter off it (4 σ of its
+    /// range noise: 3 σ was measured too few, a robot at a station sees a
+    /// wall's stretch in tens of thousands of beams), m.
+    wall_band_m: f64,
     /// Whether openings seen often enough become doors of the filter.
     discover_doors: bool,
     /// Scans taken in.
@@ -96,6 +100,30 @@ struct RoomView {
     floor_groups: Option<(usize, Vec<FloorGroup>)>,
     /// What stands on the floor, as of the last scan.
     floor_boxes: Vec<Obstacle>,
+}
+
+/// The room's walls with their doorways, for telling their echoes: a
+/// point is a wall's when it lies within `band` of the wall's line, along
+/// its stretch, and out of its doorways.
+#[derive(Clone, Debug, Default)]
+struct OwnWalls {
+    walls: Vec<(WallGeometry, Vec<[f64; 2]>)>,
+    band: f64,
+}
+
+impl OwnWalls {
+    /// `p` on the line of the wall it is an echo of; `None` when it is
+    /// no wall's.
+    fn place(&self, p: &Point2<f64>) -> Option<Point2<f64>> {
+        let band = self.band;
+        self.walls.iter().find_map(|(g, doors)| {
+            let (at, off) = (g.position(&p.coords), g.distance(&p.coords));
+            (off.abs() <= band
+                && (-band..=g.length_m + band).contains(&at)
+                && !doors.iter().any(|d| (d[0]..=d[1]).contains(&at)))
+            .then(|| Point2::from(p.coords - g.inward * off))
+        })
+    }
 }
 
 /// A connected group of floor cells: its lowest and highest cells.
@@ -199,6 +227,11 @@ const FLOOR_CELL_M: f64 = 0.05;
 /// Largest σ of the position (and of the best-known side of the room)
 /// for a scan to go into the floor map, m.
 const FLOOR_MAX_SIGMA_M: f64 = 0.02;
+
+/// How many σ of the laser's range noise a wall's echoes are taken to
+/// scatter (one beam in 30,000 farther; the echo memory forgets one that
+/// a later beam passes 10 cm beyond).
+const WALL_BAND_SIGMAS: f64 = 4.0;
 /// Echoes a cell needs to count as something standing there.
 const FLOOR_HITS: u32 = 20;
 /// Pieces of furniture nearer each other than this stand as one, m.
@@ -274,6 +307,7 @@ impl Perception {
             doors: DoorConfig::for_laser(&robot.laser),
             obstacles: Vec::new(),
             echoes: EchoMemory::default(),
+            wall_band_m: WALL_BAND_SIGMAS * robot.laser.range_sigma_m,
             discover_doors: false,
             scans: 0,
             scan_lag_s: robot.laser.sweep_duration_s() + DT_S,
@@ -426,6 +460,36 @@ impl Perception {
                 self.room.floor_occupied += 1;
             }
         }
+    }
+
+    /// The room's walls as the filter holds them, their doorways left
+    /// open, thickened by the laser's noise: the echo memory keeps their
+    /// echoes on them. None while the robot knows its place or the room
+    /// too loosely to tell a wall's echo from something before it.
+    fn own_walls(&self) -> OwnWalls {
+        let est = self.mission_estimate();
+        let loose = est.position_sigma_m > FLOOR_MAX_SIGMA_M
+            || est.room_sigma_m.iter().fold(0.0f64, |a, &b| a.max(b)) > FLOOR_MAX_SIGMA_M;
+        if loose {
+            return OwnWalls::default();
+        }
+        let band = self.wall_band_m + est.position_sigma_m;
+        let walls = room_walls(&est)
+            .into_iter()
+            .map(|(name, g)| {
+                let doors = est
+                    .doors
+                    .iter()
+                    .filter(|d| d.wall == name)
+                    .map(|d| {
+                        let half = 0.5 * d.width_m.unwrap_or(0.0) + band + 3.0 * d.sigma_m;
+                        [d.position_m - half, d.position_m + half]
+                    })
+                    .collect();
+                (g, doors)
+            })
+            .collect();
+        OwnWalls { walls, band }
     }
 
     /// Lets openings seen in the same place of a wall, scan after scan,
@@ -786,7 +850,11 @@ impl Perception {
             if at == scan.stamp {
                 let pose = Pose2::new(x[0], x[1], x[2]);
                 let echoes: Vec<Point2<f64>> = pts.points().iter().map(|q| q.p).collect();
-                self.echoes.scan(&pose, &(pose * self.mount), scan, &echoes);
+                let walls = self.own_walls();
+                self.echoes
+                    .scan(&pose, &(pose * self.mount), scan, &echoes, |p| {
+                        walls.place(p)
+                    });
             }
         }
         for profile in &r.profiles {

@@ -38,6 +38,11 @@ pub enum EventKind {
         task: usize,
         /// The behaviour's name.
         behaviour: String,
+        /// Where it drives to, in the room's frame: x, y (m) and heading
+        /// (deg); a turn on the spot where the robot stands. None for a
+        /// behaviour with no one goal (a path, a wall followed).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        goal: Option<[f64; 3]>,
     },
     /// A task finished.
     TaskDone {

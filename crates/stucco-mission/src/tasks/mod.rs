@@ -23,7 +23,7 @@ use crate::plaster::{PlasterCoverage, PlasterProgress};
 use crate::supervisor::Hazard;
 use crate::task::TaskSpec;
 use std::collections::VecDeque;
-use stucco_core::{DriveCommand, Stamp, ToolCommand};
+use stucco_core::{DriveCommand, Pose2, Stamp, ToolCommand};
 use stucco_plan::Plan;
 
 pub(crate) use door::route;
@@ -363,9 +363,18 @@ impl Behaviours {
         loop {
             if self.current.is_none() {
                 let next = self.queue.pop_front()?;
+                let at = |p: &Pose2, theta: f64| Some([p.x, p.y, theta.to_degrees()]);
+                let goal = match *next.kind() {
+                    BehaviourKind::Regulate { goal } | BehaviourKind::Reverse { goal } => {
+                        at(&goal, goal.theta)
+                    }
+                    BehaviourKind::Pivot { heading_rad, .. } => at(&cx.est.pose, heading_rad),
+                    _ => None,
+                };
                 cx.emit(EventKind::BehaviourStarted {
                     task: cx.index,
                     behaviour: next.name().to_owned(),
+                    goal,
                 });
                 self.current = Some(next);
             }

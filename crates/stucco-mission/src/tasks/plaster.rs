@@ -512,6 +512,25 @@ impl Task for Plaster {
 
     fn blocked(&mut self, cx: &mut TaskCx<'_>, blocked_s: f64) -> bool {
         let (config, est, index) = (cx.config, cx.est, cx.index);
+        // Held on the last stretch onto a station it already stands on
+        // within what the gantry has spare (the field reaches a wall the
+        // station stands nearer than its margin): it is there.
+        if let Some(run) = self.run.as_mut()
+            && matches!(run.phase, Phase::Moving)
+            && self.ways.queue.is_empty()
+            && let Some(station) = run.plan.stations.get(run.cursor.station)
+        {
+            let off = station.base.inverse() * est.pose;
+            let spare = run.plan.tool.position_tolerance_m;
+            if off.x.abs() <= spare && off.y.abs() <= spare && off.theta.abs() <= HEADING_SPARE_RAD
+            {
+                self.ways.replace(Vec::new());
+                run.phase = Phase::Settling {
+                    left_s: self.spec.settle_s,
+                };
+                return true;
+            }
+        }
         // So on a leg of a loop driven corner to corner.
         if blocked_s > REPLAN_AFTER_S
             && let Some(legs) = self.legs.as_mut()
