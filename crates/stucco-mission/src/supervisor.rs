@@ -1,6 +1,10 @@
 //! The safety supervisor: it sees every command before the platform does
 //! and may stop it — an obstacle where the robot is about to be, a bumper,
-//! the e-stop, an estimate too uncertain to drive or spray on.
+//! the e-stop, an estimate too uncertain to drive or spray on. The
+//! protective field is the stopping distance of the speed driven: a
+//! command whose field reaches something that a slower speed's does not
+//! is slowed (no faster than the robot brakes), and only stopped when
+//! even that field holds something.
 
 use crate::model::Estimate;
 use nalgebra::Point2;
@@ -156,7 +160,13 @@ pub struct Supervisor {
     /// The last obstacle point that held a command, and whether it was
     /// backing.
     last_block: Option<(Point2<f64>, bool)>,
+    /// The speed the last check let through, m/s (negative backing).
+    granted_mps: f64,
 }
+
+/// The slowest speed the supervisor slows a command to before it stops
+/// it, m/s (3 cm/s at the wheel, as a manoeuvre ends its moves).
+const CREEP_MPS: f64 = 0.05;
 
 impl Supervisor {
     /// The supervisor of `vehicle` with `config`.
@@ -167,6 +177,7 @@ impl Supervisor {
             clear_for_s: f64::INFINITY,
             lost: false,
             last_block: None,
+            granted_mps: 0.0,
         }
     }
 
@@ -260,16 +271,47 @@ impl Supervisor {
     ) -> Verdict {
         let lost = self.watch_estimate(est);
         if lost && self.config.on_lost != LostPolicy::Continue {
+            self.granted_mps = 0.0;
             return Verdict {
                 drive: DriveCommand::STOP,
                 hazard: Some(Hazard::Lost),
             };
         }
-        let block = self.blocking(&cmd, obstacles).or_else(|| {
-            (cmd.speed_mps < 0.0)
-                .then(|| self.blocking(&cmd, unseen))
-                .flatten()
-        });
+        // The field is the stopping distance of the speed driven: the
+        // fastest speed up to the command's whose field is clear is
+        // driven (a robot nearing a wall beside its way slows, as a car
+        // does, rather than stopping for good with its field on the
+        // wall), but never slower than the robot can have braked to
+        // since the last check. Only when even that field holds
+        // something is it stopped.
+        let at = |speed_mps: f64| DriveCommand {
+            speed_mps: speed_mps.copysign(cmd.speed_mps),
+            steer_rad: cmd.steer_rad,
+        };
+        let block_at = |s: f64| {
+            let c = at(s);
+            self.blocking(&c, obstacles).or_else(|| {
+                (c.speed_mps < 0.0)
+                    .then(|| self.blocking(&c, unseen))
+                    .flatten()
+            })
+        };
+        let want = cmd.speed_mps.abs();
+        let same_way = self.granted_mps * cmd.speed_mps > 0.0;
+        let braked = if same_way {
+            (self.granted_mps.abs() - self.config.stop_decel_mps2 * dt_s).max(0.0)
+        } else {
+            0.0
+        };
+        let lowest = braked.max(CREEP_MPS.min(want));
+        let mut speed = want;
+        let block = loop {
+            match block_at(speed) {
+                None => break None,
+                Some(p) if speed <= lowest => break Some(p),
+                Some(_) => speed = (0.5 * speed).max(lowest),
+            }
+        };
         if let Some(p) = block {
             self.clear_for_s = 0.0;
             self.last_block = Some((p, cmd.speed_mps < 0.0));
@@ -277,6 +319,7 @@ impl Supervisor {
             self.clear_for_s += dt_s;
         }
         if self.clear_for_s < self.config.clear_s {
+            self.granted_mps = 0.0;
             return Verdict {
                 drive: DriveCommand {
                     speed_mps: 0.0,
@@ -285,8 +328,10 @@ impl Supervisor {
                 hazard: Some(Hazard::Obstacle),
             };
         }
+        let drive = if speed < want { at(speed) } else { cmd };
+        self.granted_mps = drive.speed_mps;
         Verdict {
-            drive: cmd,
+            drive,
             hazard: None,
         }
     }
@@ -324,8 +369,9 @@ mod tests {
     fn something_ahead_stops_the_robot_and_it_waits_for_a_clear_field() {
         let mut s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
         let est = estimate(0.005);
-        // Front at 0.75 m; at 0.5 m/s the field reaches 0.75 + 0.156 + 0.15 + 0.05.
-        let person = [Point2::new(1.0, 0.1)];
+        // Front at 0.75 m; even creeping the field reaches 0.75 + 0.15 and
+        // a little.
+        let person = [Point2::new(0.85, 0.1)];
         let v = s.check(FORWARD, &person, &[], &est, 0.02);
         assert_eq!(v.hazard, Some(Hazard::Obstacle));
         assert_eq!(v.drive.speed_mps, 0.0);
@@ -341,6 +387,30 @@ mod tests {
         assert!(!s.blocked(&FORWARD, &[Point2::new(1.5, 0.0)]));
         // Standing still: nothing blocks.
         assert!(!s.blocked(&DriveCommand::STOP, &person));
+    }
+
+    /// Something ahead of a robot standing still, within the field of the
+    /// speed asked for but beyond a slower one's: it drives at that
+    /// slower speed. Something that comes as near while it drives fast
+    /// stops it: it cannot brake to the slower speed at once.
+    #[test]
+    fn a_field_the_speed_asked_for_reaches_slows_the_robot_unless_it_is_too_late() {
+        let mut s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
+        let est = estimate(0.005);
+        // At 0.5 m/s the field reaches 0.75 + 0.156 + 0.15 + 0.05 = 1.106.
+        let person = [Point2::new(1.0, 0.1)];
+        assert!(s.blocked(&FORWARD, &person));
+        let v = s.check(FORWARD, &person, &[], &est, 0.02);
+        assert_eq!(v.hazard, None);
+        assert!(v.drive.speed_mps > 0.0 && v.drive.speed_mps < 0.5, "{v:?}");
+        assert!(!s.blocked(&v.drive, &person));
+        assert_eq!(v.drive.steer_rad, FORWARD.steer_rad);
+        // Driving at 0.5 m/s with the field clear; the person steps in.
+        let mut fast = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
+        assert_eq!(fast.check(FORWARD, &[], &[], &est, 0.02).drive, FORWARD);
+        let v = fast.check(FORWARD, &person, &[], &est, 0.02);
+        assert_eq!(v.hazard, Some(Hazard::Obstacle));
+        assert_eq!(v.drive.speed_mps, 0.0);
     }
 
     #[test]
