@@ -458,7 +458,8 @@ impl<P: Simulated> Sink<P> for SimRun<'_> {
         let made = out.events.iter().find_map(|e| match e.kind {
             EventKind::PlanMade { task, .. }
             | EventKind::WindowFound { task, .. }
-            | EventKind::StationGivenUp { task, .. } => Some(task),
+            | EventKind::StationGivenUp { task, .. }
+            | EventKind::StationDeferred { task, .. } => Some(task),
             _ => None,
         });
         let taken_up = self

@@ -48,6 +48,11 @@ const RUNS_M: [f64; 7] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2];
 const BUDGET: usize = 100_000;
 /// How much the search's estimate of the time still to go is inflated.
 const GREED: f64 = 1.5;
+/// A run's start this far off the line through its goal, m, or turned
+/// this much from it, rad, is taken onto the line by the line law with a
+/// swing of the body no straight run sweeps.
+const RUN_OFF_LINE_M: f64 = 0.05;
+const RUN_OFF_LINE_RAD: f64 = 0.1;
 /// A goal this near needs no run, m, and this near in heading no turn, rad.
 const AT_GOAL_M: f64 = 0.01;
 const AT_GOAL_RAD: f64 = 0.01;
@@ -305,6 +310,26 @@ impl<'a> Space<'a> {
             })
             .collect();
         let moves = moves?;
+        // A run is driven along the line through its goal (the line law):
+        // started off that line, or turned from it, the robot swings its
+        // body across to the line, which a straight run does not sweep
+        // (a station 30 cm beside the last at the end of a corridor: its
+        // front swung onto the far wall). Such a way is no straight run.
+        let (mut p, mut theta) = (from.position(), from.theta);
+        for m in &moves {
+            match *m {
+                Move::Turn(h) => theta = h,
+                Move::Run { to, .. } => {
+                    let normal = Vector2::new(-to.theta.sin(), to.theta.cos());
+                    if wrap_angle(theta - to.theta).abs() > RUN_OFF_LINE_RAD
+                        || normal.dot(&(p - to.position())).abs() > RUN_OFF_LINE_M
+                    {
+                        return None;
+                    }
+                    (p, theta) = (to.position(), to.theta);
+                }
+            }
+        }
         self.moves_clear(from, &moves)
             .then(|| self.cost(from, &moves))
     }

@@ -98,6 +98,9 @@ pub(crate) struct PlasterRun {
     /// Stations of this plan given up, and the area only they reached,
     /// m².
     pub given_up: (usize, f64),
+    /// The bases of the stations put last once already (their way stayed
+    /// blocked): blocked again, they are given up.
+    pub deferred: Vec<Pose2>,
     /// How long the spray has been held at this station for a position
     /// known too loosely to spray on, s (0 while it sprays).
     pub held_s: f64,
@@ -116,6 +119,7 @@ impl PlasterRun {
             unsaved_s: 0.0,
             way_unchecked: false,
             given_up: (0, 0.0),
+            deferred: Vec::new(),
             held_s: 0.0,
         }
     }
@@ -139,6 +143,30 @@ impl PlasterRun {
         self.way_unchecked = false;
         self.given_up = (self.given_up.0 + 1, self.given_up.1 + lost);
         Some(lost)
+    }
+
+    /// Puts the current station last, once: its way stayed blocked, and
+    /// it is tried again after the rest. False when it was put last
+    /// before, or is the last (then it is to be given up).
+    pub fn defer_station(&mut self) -> bool {
+        let k = self.cursor.station;
+        let last = self.plan.stations.len().saturating_sub(1);
+        let Some(base) = self.plan.stations.get(k).map(|s| s.base) else {
+            return false;
+        };
+        if k >= last || self.deferred.contains(&base) {
+            return false;
+        }
+        let station = self.plan.stations.remove(k);
+        self.plan.stations.push(station);
+        self.deferred.push(base);
+        self.cursor.pass = 0;
+        self.cursor.step = 0;
+        self.resume_s = 0.0;
+        self.retries = 0;
+        self.way_unchecked = false;
+        self.digest = plan_digest(&self.plan);
+        true
     }
 
     /// Puts `plan` in place of the one carried out, from its start.

@@ -1596,6 +1596,62 @@ fn a_robot_held_within_the_gantrys_spare_of_its_station_takes_it_from_there() {
     );
 }
 
+/// Someone standing in the way to the second station for 20 s (longer
+/// than half the supervisor's timeout): the station is put last and the
+/// job goes on; the person gone, it is plastered at the end and the job
+/// is done, every station of the plan plastered.
+#[test]
+fn a_station_whose_way_stays_blocked_is_put_last_and_done_at_the_end() {
+    let config = ExecutiveConfig {
+        spray: Some(stucco_plan::SprayTool::default()),
+        ..config(true)
+    };
+    let mut exec = Executive::new(config, vec![plaster(false)]);
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let (mut events, mut block_from) = (Vec::new(), None);
+    for _ in 0..(6000.0 / DT) as usize {
+        let blocking = block_from.is_some_and(|t: f64| robot.now.as_secs_f64() - t < 20.0);
+        let seen: Vec<Point2<f64>> = if blocking {
+            vec![Point2::new(0.85, 0.0), Point2::new(-0.25, 0.0)]
+        } else {
+            Vec::new()
+        };
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        for e in &out.events {
+            if block_from.is_none()
+                && matches!(e.kind, EventKind::BehaviourStarted { .. })
+                && events
+                    .iter()
+                    .any(|e: &Event| matches!(e.kind, EventKind::PassDone { station: 0, .. }))
+            {
+                block_from = Some(robot.now.as_secs_f64());
+            }
+        }
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(*exec.mode(), MissionMode::Done, "{:?}", kinds(&events));
+    let k = kinds(&events);
+    assert_eq!(
+        k.iter().filter(|k| *k == "station_deferred").count(),
+        1,
+        "{k:?}"
+    );
+    assert!(!k.iter().any(|k| k == "station_given_up"), "{k:?}");
+    let stations = events
+        .iter()
+        .find_map(|e| match e.kind {
+            EventKind::PlanMade { stations, .. } => Some(stations),
+            _ => None,
+        })
+        .expect("a plan made");
+    let started = k.iter().filter(|k| *k == "station_started").count();
+    assert_eq!(started, stations);
+}
+
 /// On the kinematic robot with a perfect estimate, a 5 × 3 m room: every
 /// pass of the plan is sprayed, the nozzle only ever within the gantry's
 /// travel and spraying only while standing, a checkpoint due at least

@@ -150,6 +150,15 @@ pub enum EventKind {
         /// Plasterable area lost with it, m².
         unreachable_m2: f64,
     },
+    /// The way to a plastering station stayed blocked (someone standing
+    /// in it, a wall nearer the station than the field's margin): the
+    /// station is put last, to be tried again when the rest are done.
+    StationDeferred {
+        /// The task.
+        task: usize,
+        /// The station's index in the plan before it was put last.
+        station: usize,
+    },
     /// A surface's pass at a station is sprayed.
     PassDone {
         /// The task.
@@ -210,6 +219,7 @@ impl EventKind {
             EventKind::WindowEdgeLook { .. } => "window_edge_look",
             EventKind::WindowFound { .. } => "window_found",
             EventKind::StationGivenUp { .. } => "station_given_up",
+            EventKind::StationDeferred { .. } => "station_deferred",
             EventKind::PassDone { .. } => "pass_done",
             EventKind::RoomEntered { .. } => "room_entered",
             EventKind::PlanMade { .. } => "plan_made",

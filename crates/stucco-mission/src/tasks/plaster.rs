@@ -596,6 +596,43 @@ impl Task for Plaster {
             cx.effects.checkpoint = true;
             return true;
         }
+        // On a way found clear that stays blocked (someone standing in
+        // it; a wall nearer the station than the field lets the robot
+        // come): the station is put last, and given up when blocked
+        // again, rather than the job failing with most of it undone.
+        // Half the supervisor's timeout: long enough for someone to walk
+        // past, and the task's own decision before the supervisor's.
+        if blocked_s > 0.5 * config.safety.blocked_timeout_s
+            && let Some(run) = self.run.as_mut()
+            && matches!(run.phase, Phase::Moving)
+        {
+            let station = run.cursor.station;
+            if run.defer_station() {
+                cx.emit(EventKind::StationDeferred {
+                    task: index,
+                    station,
+                });
+            } else if let Some(lost) = run.give_up_station() {
+                cx.emit(EventKind::StationGivenUp {
+                    task: index,
+                    station,
+                    unreachable_m2: lost,
+                });
+            }
+            let clearance = pivot_clearance(config);
+            self.ways.replace(next_station_way(
+                config,
+                clearance,
+                run,
+                &est.pose,
+                self.spec.speed_mps,
+            ));
+            if run.finished() {
+                run.phase = Phase::Leaving;
+            }
+            cx.effects.checkpoint = true;
+            return true;
+        }
         false
     }
 
