@@ -67,7 +67,7 @@ mod perception;
 mod robot;
 
 pub use checkpoint::{Checkpointer, TaskTimes, windows_by_room};
-pub use echoes::EchoMemory;
+pub use echoes::{EchoMemory, RecentScans};
 pub use event_log::EventLog;
 pub use perception::{DT_S, OBSTACLE_HEIGHT_M, Perception, RoomWindows};
 pub use robot::{Robot, Sink, SinkError};

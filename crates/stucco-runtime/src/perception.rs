@@ -5,7 +5,7 @@
 //! what stands on the floor mapped. It knows nothing of where its readings
 //! come from: the simulator and a real robot feed it alike.
 
-use crate::EchoMemory;
+use crate::{EchoMemory, RecentScans};
 use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_core::{EncoderSample, Pose2, Readings, RobotSpec, Stamp, TOOL_CAMERA, Twist2};
 use stucco_mission::{
@@ -40,6 +40,8 @@ pub struct Perception {
     obstacles: Vec<Point2<f64>>,
     /// Echoes of earlier scans, for what the laser no longer sees.
     echoes: EchoMemory,
+    /// The last scans, to tell echoes of what moves (people walking).
+    recent: RecentScans,
     /// How far the laser's echoes of a wall scatter off it (4 σ of its
     /// range noise: 3 σ was measured too few, a robot at a station sees a
     /// wall's stretch in tens of thousands of beams), m.
@@ -92,6 +94,9 @@ struct RoomView {
     ceiling_m: std::collections::VecDeque<f64>,
     /// Scan echoes off the walls, counted in cells of the room frame.
     floor: std::collections::BTreeMap<(i64, i64), u32>,
+    /// Cells of the room frame about an echo of something moving, and
+    /// when: kept out of `floor` for [`MOVING_FLOOR_S`].
+    moving: std::collections::BTreeMap<(i64, i64), Stamp>,
     /// Cells of `floor` with [`FLOOR_HITS`] echoes or more: a count only
     /// grows, so this changes exactly when the set of such cells does.
     floor_occupied: usize,
@@ -198,6 +203,7 @@ impl RoomView {
             tool_wall: None,
             ceiling_m: std::collections::VecDeque::new(),
             floor: std::collections::BTreeMap::new(),
+            moving: std::collections::BTreeMap::new(),
             floor_occupied: 0,
             floor_groups: None,
             floor_boxes: Vec::new(),
@@ -234,6 +240,13 @@ const FLOOR_MAX_SIGMA_M: f64 = 0.02;
 const WALL_BAND_SIGMAS: f64 = 4.0;
 /// Echoes a cell needs to count as something standing there.
 const FLOOR_HITS: u32 = 20;
+/// How long the floor about an echo of something moving is kept out of
+/// the floor map, s: a person who walked up and waits for the robot to
+/// pass is not furniture (one who stands longer is).
+const MOVING_FLOOR_S: f64 = 30.0;
+/// How far about a moving echo the floor is kept out, cells (a person's
+/// other foot).
+const MOVING_REACH_CELLS: i64 = 3;
 /// Pieces of furniture nearer each other than this stand as one, m.
 const FURNITURE_GAP_M: f64 = 0.9;
 /// Thin pieces (legs, rows of legs) this near each other are one table,
@@ -307,6 +320,7 @@ impl Perception {
             doors: DoorConfig::for_laser(&robot.laser),
             obstacles: Vec::new(),
             echoes: EchoMemory::default(),
+            recent: RecentScans::new(robot.laser.range_sigma_m),
             wall_band_m: WALL_BAND_SIGMAS * robot.laser.range_sigma_m,
             discover_doors: false,
             scans: 0,
@@ -440,8 +454,35 @@ impl Perception {
         let laser = then * self.mount;
         let [xs, ys] = est.room_m;
         let outline = (!est.corners.is_empty()).then(|| stucco_plan::Outline::new(&est.corners));
-        for q in pts.points() {
-            let p = laser.transform_point(&q.p);
+        let cell = |p: &Point2<f64>| {
+            (
+                (p.x / FLOOR_CELL_M).floor() as i64,
+                (p.y / FLOOR_CELL_M).floor() as i64,
+            )
+        };
+        // Something that moved there (a person walking) is no furniture,
+        // nor is it where it stops a while later (a person waiting for
+        // the robot to pass): the cells round a moving echo are marked.
+        let points: Vec<Point2<f64>> = pts
+            .points()
+            .iter()
+            .map(|q| laser.transform_point(&q.p))
+            .collect();
+        let moving = &mut self.room.moving;
+        moving.retain(|_, seen| stamp.seconds_since(*seen) <= MOVING_FLOOR_S);
+        for p in points.iter().filter(|p| self.recent.saw_through(p)) {
+            let (i, j) = cell(p);
+            for di in -MOVING_REACH_CELLS..=MOVING_REACH_CELLS {
+                for dj in -MOVING_REACH_CELLS..=MOVING_REACH_CELLS {
+                    moving.insert((i + di, j + dj), stamp);
+                }
+            }
+        }
+        for p in &points {
+            if moving.contains_key(&cell(p)) {
+                continue;
+            }
+            let p = *p;
             let off = 0.12;
             let off_walls = match &outline {
                 Some(o) => o.clearance_m(&p) >= off,
@@ -450,11 +491,7 @@ impl Perception {
             if !off_walls {
                 continue;
             }
-            let c = (
-                (p.x / FLOOR_CELL_M).floor() as i64,
-                (p.y / FLOOR_CELL_M).floor() as i64,
-            );
-            let n = self.room.floor.entry(c).or_insert(0);
+            let n = self.room.floor.entry(cell(&p)).or_insert(0);
             *n += 1;
             if *n == FLOOR_HITS {
                 self.room.floor_occupied += 1;
@@ -699,6 +736,7 @@ impl Perception {
             .ok_or_else(|| format!("door {door} of the plan is not a door of {}", name(room)))?;
         // The echoes kept are in the frame being left.
         self.echoes.clear();
+        self.recent.clear();
         let (x, p) = self.room.ekf.now();
         let pose = Pose2::new(x[0], x[1], x[2]);
         let (corners, size) = self.room.geometry();
@@ -851,10 +889,17 @@ impl Perception {
                 let pose = Pose2::new(x[0], x[1], x[2]);
                 let echoes: Vec<Point2<f64>> = pts.points().iter().map(|q| q.p).collect();
                 let walls = self.own_walls();
-                self.echoes
-                    .scan(&pose, &(pose * self.mount), scan, &echoes, |p| {
-                        walls.place(p)
-                    });
+                let sensor = pose * self.mount;
+                let recent = &self.recent;
+                self.echoes.scan(
+                    &pose,
+                    &sensor,
+                    scan,
+                    &echoes,
+                    |p| walls.place(p),
+                    |p| recent.saw_through(p),
+                );
+                self.recent.push(sensor, scan);
             }
         }
         for profile in &r.profiles {
@@ -1316,6 +1361,54 @@ mod tests {
         let perception =
             Perception::new(&spec, x0, [0.01, 0.01], sim.now()).expect("valid settings");
         (idle_robot(sim, perception, &spec), start)
+    }
+
+    /// What the robot standing at the apartment's start maps on the
+    /// floor in `seconds`, with `people` walking about.
+    fn floor_seen_with(people: Vec<stucco_sim::PersonSpec>, seconds: f64) -> Vec<Obstacle> {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../sim/worlds/apartment.toml");
+        let mut world = WorldSpec::load(&path).expect("the apartment");
+        world.people = people;
+        let start = Pose2::new(
+            world.robot.at[0],
+            world.robot.at[1],
+            world.robot.heading_deg.to_radians(),
+        );
+        let x0 = RoomState::new(start.x, start.y, start.theta, 5.0, 2.85);
+        let cfg = SimConfig::default();
+        let spec = cfg.robot();
+        let sim = Simulator::new(&world, cfg, Some(5));
+        let perception =
+            Perception::new(&spec, x0, [0.01, 0.01], sim.now()).expect("valid settings");
+        let mut robot = idle_robot(sim, perception, &spec);
+        for _ in 0..(seconds / DT_S) as usize {
+            drive(&mut robot, 0.0, 0.0);
+        }
+        robot.perception().floor_obstacles()
+    }
+
+    /// A person pacing to and fro in front of a robot standing still for
+    /// a minute is not mapped as something standing on the floor: their
+    /// echoes are where the scans just before saw through.
+    #[test]
+    fn a_person_pacing_in_front_of_the_robot_is_not_mapped() {
+        let pacing = stucco_sim::PersonSpec {
+            path: vec![[3.2, 0.5], [3.2, 2.3]],
+            speed_mps: 0.6,
+        };
+        let (with, without) = (
+            floor_seen_with(vec![pacing], 60.0),
+            floor_seen_with(Vec::new(), 60.0),
+        );
+        let on_the_path = |o: &Obstacle| {
+            o.min_m[0] < 3.35 && o.max_m[0] > 3.05 && o.min_m[1] < 2.2 && o.max_m[1] > 0.6
+        };
+        assert!(
+            with.iter().filter(|o| on_the_path(o)).count()
+                <= without.iter().filter(|o| on_the_path(o)).count(),
+            "mapped the person: {with:?} (without them: {without:?})"
+        );
     }
 
     /// A robot on `sim` with `perception` whose executive idles.
