@@ -1365,6 +1365,7 @@ mod tests {
 
     /// What the robot standing at the apartment's start maps on the
     /// floor in `seconds`, with `people` walking about.
+    #[allow(clippy::expect_used)]
     fn floor_seen_with(people: Vec<stucco_sim::PersonSpec>, seconds: f64) -> Vec<Obstacle> {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../sim/worlds/apartment.toml");
