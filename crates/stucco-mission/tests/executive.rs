@@ -733,6 +733,50 @@ fn map_room_drives_loops_until_the_room_is_known() {
     assert!(loops_seen >= 2, "{loops_seen} loops");
 }
 
+/// A room known (its walls seen, its size measured) while the robot is
+/// held between two corners of its loop (someone standing in its way):
+/// map_room is done at its timeout where the robot stands, not failed.
+#[test]
+fn map_room_held_between_corners_with_the_room_known_is_done_at_its_timeout() {
+    let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
+    robot.room_sigma = [0.05; 2];
+    let spec = TaskSpec::MapRoom {
+        path: None,
+        walls: None,
+        min_sightings: 20,
+        inset_m: 1.0,
+        speed_mps: 0.4,
+        max_size_sigma_m: 0.005,
+        timeout_s: 20.0,
+    };
+    let mut exec = executive(vec![spec], true);
+    let mut held = 0;
+    for _ in 0..(60.0 / DT) as usize {
+        let moving = robot.pose.x > 1.2;
+        if moving {
+            // Known now; someone steps in just past the field's edge.
+            robot.room_sigma = [0.002; 2];
+        }
+        let seen = if moving {
+            vec![
+                Point2::new(0.85, 0.0),
+                Point2::new(0.85, 0.2),
+                Point2::new(0.85, -0.2),
+            ]
+        } else {
+            Vec::new()
+        };
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        held += usize::from(exec.hazard() == Some(Hazard::Obstacle));
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert!(held > 0, "never held");
+    assert_eq!(exec.mode(), &MissionMode::Done);
+}
+
 // ---- Telecommands --------------------------------------------------------
 
 fn command(id: &str, at: Stamp, command: Command) -> Telecommand {
