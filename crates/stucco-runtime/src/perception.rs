@@ -94,9 +94,6 @@ struct RoomView {
     ceiling_m: std::collections::VecDeque<f64>,
     /// Scan echoes off the walls, counted in cells of the room frame.
     floor: std::collections::BTreeMap<(i64, i64), u32>,
-    /// Cells of the room frame about an echo of something moving, and
-    /// when: kept out of `floor` for [`MOVING_FLOOR_S`].
-    moving: std::collections::BTreeMap<(i64, i64), Stamp>,
     /// Cells of `floor` with [`FLOOR_HITS`] echoes or more: a count only
     /// grows, so this changes exactly when the set of such cells does.
     floor_occupied: usize,
@@ -203,7 +200,6 @@ impl RoomView {
             tool_wall: None,
             ceiling_m: std::collections::VecDeque::new(),
             floor: std::collections::BTreeMap::new(),
-            moving: std::collections::BTreeMap::new(),
             floor_occupied: 0,
             floor_groups: None,
             floor_boxes: Vec::new(),
@@ -240,13 +236,6 @@ const FLOOR_MAX_SIGMA_M: f64 = 0.02;
 const WALL_BAND_SIGMAS: f64 = 4.0;
 /// Echoes a cell needs to count as something standing there.
 const FLOOR_HITS: u32 = 20;
-/// How long the floor about an echo of something moving is kept out of
-/// the floor map, s: a person who walked up and waits for the robot to
-/// pass is not furniture (one who stands longer is).
-const MOVING_FLOOR_S: f64 = 30.0;
-/// How far about a moving echo the floor is kept out, cells (a person's
-/// other foot).
-const MOVING_REACH_CELLS: i64 = 3;
 /// Pieces of furniture nearer each other than this stand as one, m.
 const FURNITURE_GAP_M: f64 = 0.9;
 /// Thin pieces (legs, rows of legs) this near each other are one table,
@@ -460,29 +449,18 @@ impl Perception {
                 (p.y / FLOOR_CELL_M).floor() as i64,
             )
         };
-        // Something that moved there (a person walking) is no furniture,
-        // nor is it where it stops a while later (a person waiting for
-        // the robot to pass): the cells round a moving echo are marked.
+        // Something that moved there (a person walking) is no furniture.
+        // One who stands still for more than the scans kept (half a
+        // second) is mapped as such, and stays: the floor map only counts.
         let points: Vec<Point2<f64>> = pts
             .points()
             .iter()
             .map(|q| laser.transform_point(&q.p))
             .collect();
-        let moving = &mut self.room.moving;
-        moving.retain(|_, seen| stamp.seconds_since(*seen) <= MOVING_FLOOR_S);
-        for p in points.iter().filter(|p| self.recent.saw_through(p)) {
-            let (i, j) = cell(p);
-            for di in -MOVING_REACH_CELLS..=MOVING_REACH_CELLS {
-                for dj in -MOVING_REACH_CELLS..=MOVING_REACH_CELLS {
-                    moving.insert((i + di, j + dj), stamp);
-                }
-            }
-        }
-        for p in &points {
-            if moving.contains_key(&cell(p)) {
+        for p in points {
+            if self.recent.saw_through(&p) {
                 continue;
             }
-            let p = *p;
             let off = 0.12;
             let off_walls = match &outline {
                 Some(o) => o.clearance_m(&p) >= off,
@@ -1389,11 +1367,13 @@ mod tests {
         robot.perception().floor_obstacles()
     }
 
-    /// A person pacing to and fro in front of a robot standing still for
-    /// a minute is not mapped as something standing on the floor: their
-    /// echoes are where the scans just before saw through.
+    /// A person pacing to and fro across the room in front of a robot
+    /// standing still for a minute is not mapped where they walk: their
+    /// echoes are where the scans just before saw through. Where they
+    /// turn back (half a second on the same spot) they still are: the
+    /// floor map only counts (the log-odds map is the next step).
     #[test]
-    fn a_person_pacing_in_front_of_the_robot_is_not_mapped() {
+    fn a_person_pacing_in_front_of_the_robot_is_not_mapped_where_they_walk() {
         let pacing = stucco_sim::PersonSpec {
             path: vec![[3.2, 0.5], [3.2, 2.3]],
             speed_mps: 0.6,
@@ -1402,8 +1382,9 @@ mod tests {
             floor_seen_with(vec![pacing], 60.0),
             floor_seen_with(Vec::new(), 60.0),
         );
+        // The middle of their walk, half a metre from either end.
         let on_the_path = |o: &Obstacle| {
-            o.min_m[0] < 3.35 && o.max_m[0] > 3.05 && o.min_m[1] < 2.2 && o.max_m[1] > 0.6
+            o.min_m[0] < 3.35 && o.max_m[0] > 3.05 && o.min_m[1] < 1.8 && o.max_m[1] > 1.0
         };
         assert!(
             with.iter().filter(|o| on_the_path(o)).count()
