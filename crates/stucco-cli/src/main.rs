@@ -67,7 +67,7 @@ enum Command {
         resume: bool,
         /// Stop after this many simulated seconds, as if switched off (a
         /// task mission's checkpoint keeps what was finished).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_seconds)]
         stop_after: Option<f64>,
         /// Record the run to DIR/run.mcap (sensor-derived inputs, commands,
         /// events, the true pose; open it in Foxglove).
@@ -99,7 +99,7 @@ enum Command {
         #[arg(long, default_value_t = 1.0)]
         speed: f64,
         /// Stop after this many simulated seconds.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_seconds)]
         stop_after: Option<f64>,
         /// Join as a client of the router `--connect` names, not as a peer.
         #[arg(long)]
@@ -286,7 +286,7 @@ enum Command {
         out: PathBuf,
         /// Stop each job after this many simulated seconds (as if switched
         /// off: its outcome `stopped`, its scores as far as it got).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_seconds)]
         stop_after: Option<f64>,
         /// Print the rows as one JSON array on stdout.
         #[arg(long)]
@@ -332,7 +332,7 @@ enum SimAction {
         #[arg(long, default_value_t = 1.0)]
         speed: f64,
         /// Stop after this many simulated seconds.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_seconds)]
         stop_after: Option<f64>,
         /// Endpoints to listen on (e.g. `tcp/127.0.0.1:7447`).
         #[arg(long)]
@@ -550,6 +550,15 @@ fn parse_region(s: &str) -> Result<stucco_core::Region, String> {
 
 fn parse_wall(s: &str) -> Result<WallName, String> {
     s.parse()
+}
+
+/// A span of time in seconds: a number more than 0.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(_) => Err(format!("{s} s: a time more than 0 s, and finite")),
+        Err(e) => Err(format!("{s}: {e}")),
+    }
 }
 
 /// `stucco bench`.

@@ -68,3 +68,22 @@ fn the_buildings_study_runs_each_job_or_says_why_it_could_not() {
         "{table}"
     );
 }
+
+/// A stop that is no time (0, negative, not a number) is refused before
+/// anything runs, naming the option, with the usage error's exit code.
+#[test]
+fn a_stop_after_that_is_no_time_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for bad in ["0", "-5", "inf", "soon"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_stucco"))
+            .args(["buildings", "--count", "1", "--out"])
+            .arg(dir.path())
+            .arg(format!("--stop-after={bad}"))
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("--stop-after"), "{bad}: {err}");
+    }
+    assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none());
+}
