@@ -135,14 +135,20 @@ impl PlasterRun {
     /// as unreachable. The area lost, m².
     pub fn give_up_station(&mut self) -> Option<f64> {
         let lost = self.plan.give_up_station(self.cursor.station)?;
+        self.station_changed();
+        self.given_up = (self.given_up.0 + 1, self.given_up.1 + lost);
+        Some(lost)
+    }
+
+    /// Another station is now at the cursor: from its start, the plan's
+    /// digest made again.
+    fn station_changed(&mut self) {
         self.cursor.pass = 0;
         self.cursor.step = 0;
         self.resume_s = 0.0;
         self.retries = 0;
         self.digest = plan_digest(&self.plan);
         self.way_unchecked = false;
-        self.given_up = (self.given_up.0 + 1, self.given_up.1 + lost);
-        Some(lost)
     }
 
     /// Puts the current station last, once: its way stayed blocked, and
@@ -160,12 +166,7 @@ impl PlasterRun {
         let station = self.plan.stations.remove(k);
         self.plan.stations.push(station);
         self.deferred.push(base);
-        self.cursor.pass = 0;
-        self.cursor.step = 0;
-        self.resume_s = 0.0;
-        self.retries = 0;
-        self.way_unchecked = false;
-        self.digest = plan_digest(&self.plan);
+        self.station_changed();
         true
     }
 

@@ -1537,6 +1537,23 @@ fn a_plaster_task_without_a_spray_tool_fails_saying_so() {
     assert!(reason.contains("[spray]"), "{reason}");
 }
 
+/// A plastering job alone, unattended, with the mission's spray tool
+/// and no survey, the robot in the middle of the 5 × 3 m room.
+fn plastering_alone() -> (Executive, Robot) {
+    let config = ExecutiveConfig {
+        spray: Some(stucco_plan::SprayTool::default()),
+        ..config(true)
+    };
+    (
+        Executive::new(config, vec![plaster(false)]),
+        Robot::at(Pose2::new(2.5, 1.5, 0.0)),
+    )
+}
+
+/// Echoes ahead and behind the body, in its width, that the field of any
+/// run along its heading holds, even creeping (robot frame).
+const HOLDING: [Point2<f64>; 2] = [Point2::new(0.85, 0.0), Point2::new(-0.25, 0.0)];
+
 /// A position the estimate keeps known only to 1.5 cm (the spray needs
 /// 1 cm): the robot gets to its first station, holds the spray there as
 /// long as the supervisor waits for a lost estimate, and then the task
@@ -1544,13 +1561,8 @@ fn a_plaster_task_without_a_spray_tool_fails_saying_so() {
 /// ever.
 #[test]
 fn a_station_held_for_a_loose_position_fails_the_task_after_the_timeout() {
-    let config = ExecutiveConfig {
-        spray: Some(stucco_plan::SprayTool::default()),
-        ..config(true)
-    };
-    let timeout_s = config.safety.lost_timeout_s;
-    let mut exec = Executive::new(config, vec![plaster(false)]);
-    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let timeout_s = SafetyConfig::default().lost_timeout_s;
+    let (mut exec, mut robot) = plastering_alone();
     robot.position_sigma = 0.015;
     let (mut sprayed, mut t, mut started) = (false, 0.0, None);
     for _ in 0..(900.0 / DT) as usize {
@@ -1594,12 +1606,7 @@ fn a_station_held_for_a_loose_position_fails_the_task_after_the_timeout() {
 /// until the way fails.
 #[test]
 fn a_robot_held_within_the_gantrys_spare_of_its_station_takes_it_from_there() {
-    let config = ExecutiveConfig {
-        spray: Some(stucco_plan::SprayTool::default()),
-        ..config(true)
-    };
-    let mut exec = Executive::new(config, vec![plaster(false)]);
-    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let (mut exec, mut robot) = plastering_alone();
     let (mut held, mut stopped) = (false, false);
     let mut started = None;
     for _ in 0..(300.0 / DT) as usize {
@@ -1609,9 +1616,7 @@ fn a_robot_held_within_the_gantrys_spare_of_its_station_takes_it_from_there() {
         let near = base.is_some_and(|b| (b.inverse() * robot.pose).x.abs() < 0.02);
         held |= near && started.is_none();
         let seen: Vec<Point2<f64>> = if held && started.is_none() {
-            // Ahead and behind, inside the body's width: the field holds
-            // any run along the lane.
-            vec![Point2::new(0.85, 0.0), Point2::new(-0.25, 0.0)]
+            HOLDING.to_vec()
         } else {
             Vec::new()
         };
@@ -1646,17 +1651,12 @@ fn a_robot_held_within_the_gantrys_spare_of_its_station_takes_it_from_there() {
 /// is done, every station of the plan plastered.
 #[test]
 fn a_station_whose_way_stays_blocked_is_put_last_and_done_at_the_end() {
-    let config = ExecutiveConfig {
-        spray: Some(stucco_plan::SprayTool::default()),
-        ..config(true)
-    };
-    let mut exec = Executive::new(config, vec![plaster(false)]);
-    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let (mut exec, mut robot) = plastering_alone();
     let (mut events, mut block_from) = (Vec::new(), None);
     for _ in 0..(6000.0 / DT) as usize {
         let blocking = block_from.is_some_and(|t: f64| robot.now.as_secs_f64() - t < 20.0);
         let seen: Vec<Point2<f64>> = if blocking {
-            vec![Point2::new(0.85, 0.0), Point2::new(-0.25, 0.0)]
+            HOLDING.to_vec()
         } else {
             Vec::new()
         };

@@ -66,8 +66,8 @@ impl EchoMemory {
     /// Takes in a scan: `sensor` is the laser's pose in the room frame and
     /// `pose` the rear axle's, `echoes` the scan's echoes in the sensor's
     /// frame; `wall` places an echo of the room's own walls on the wall
-    /// (room frame; `None` for any other echo), and `moving` tells an
-    /// echo of something moving (room frame), kept [`MOVING_KEEP_S`].
+    /// (room frame; `None` for any other echo), and `moving` tells, echo
+    /// by echo, those of something moving, kept [`MOVING_KEEP_S`].
     pub fn scan(
         &mut self,
         pose: &Pose2,
@@ -75,7 +75,7 @@ impl EchoMemory {
         scan: &Scan,
         echoes: &[Point2<f64>],
         wall: impl Fn(&Point2<f64>) -> Option<Point2<f64>>,
-        moving: impl Fn(&Point2<f64>) -> bool,
+        moving: &[bool],
     ) {
         let to_sensor = sensor.inverse();
         let centre = Point2::new(pose.x, pose.y);
@@ -94,9 +94,9 @@ impl EchoMemory {
             fan.range_at(q.y.atan2(q.x))
                 .is_none_or(|range| range <= q.coords.norm() + 2.0 * CELL_M)
         });
-        for e in echoes {
+        for (k, e) in echoes.iter().enumerate() {
             let p = sensor.transform_point(e);
-            let moving = moving(&p);
+            let moving = moving.get(k).copied().unwrap_or(false);
             let at = wall(&p).unwrap_or(p);
             let key = (
                 (at.x / CELL_M).floor() as i64,
@@ -150,6 +150,7 @@ impl EchoMemory {
 /// differencing): a person walking, not the room.
 #[derive(Clone, Debug)]
 pub struct RecentScans {
+    /// Each scan with the room frame in the laser's frame then.
     scans: std::collections::VecDeque<(Pose2, Scan)>,
     /// How far beyond an echo the beams of a scan must have reached to
     /// have seen through it, m: its range noise, both ways, and more.
@@ -175,14 +176,14 @@ impl RecentScans {
         if self.scans.len() == RECENT_SCANS {
             self.scans.pop_front();
         }
-        self.scans.push_back((sensor, scan.clone()));
+        self.scans.push_back((sensor.inverse(), scan.clone()));
     }
 
     /// True when a kept scan saw through `p` (room frame): its beam
     /// toward it and the beams either side reached past it by the margin.
     pub fn saw_through(&self, p: &Point2<f64>) -> bool {
-        self.scans.iter().any(|(sensor, scan)| {
-            let q = sensor.inverse().transform_point(p);
+        self.scans.iter().any(|(to_sensor, scan)| {
+            let q = to_sensor.transform_point(p);
             let (bearing, range) = (q.y.atan2(q.x), q.coords.norm());
             let step = scan.angle_increment_rad;
             let fan = Fan::of(scan);
@@ -250,14 +251,7 @@ mod tests {
         let ahead = Pose2::new(1.0, 1.0, 0.0);
         // An echo 1 m ahead.
         let s = scan(0.0, |b| if b.abs() < 1e-9 { 1.0 } else { f64::INFINITY });
-        m.scan(
-            &ahead,
-            &ahead,
-            &s,
-            &[Point2::new(1.0, 0.0)],
-            |_| None,
-            |_| false,
-        );
+        m.scan(&ahead, &ahead, &s, &[Point2::new(1.0, 0.0)], |_| None, &[]);
         assert!(m.unseen().is_empty(), "in view: not handed out");
         // Turned round: the echo is 1 m behind the robot.
         let back = Pose2::new(1.0, 1.0, std::f64::consts::PI);
@@ -267,20 +261,13 @@ mod tests {
             &scan(1.0, |_| f64::INFINITY),
             &[],
             |_| None,
-            |_| false,
+            &[],
         );
         assert_eq!(m.unseen().len(), 1);
         let p = m.unseen()[0];
         assert!((p.x + 1.0).abs() < 1e-9 && p.y.abs() < 1e-9, "{p}");
         // Turned again, the beam goes past where it was: gone.
-        m.scan(
-            &ahead,
-            &ahead,
-            &scan(2.0, |_| 5.0),
-            &[],
-            |_| None,
-            |_| false,
-        );
+        m.scan(&ahead, &ahead, &scan(2.0, |_| 5.0), &[], |_| None, &[]);
         assert!(m.is_empty());
     }
 
@@ -293,14 +280,7 @@ mod tests {
         let wall: Vec<Point2<f64>> = (0..40)
             .map(|k| Point2::new(0.5, -1.0 + 0.05 * k as f64))
             .collect();
-        m.scan(
-            &pose,
-            &pose,
-            &scan(0.0, |_| 0.5),
-            &wall,
-            |_| None,
-            |_| false,
-        );
+        m.scan(&pose, &pose, &scan(0.0, |_| 0.5), &wall, |_| None, &[]);
         assert_eq!(m.len(), 40);
         let away = Pose2::new(-(RADIUS_M + 2.0), 0.0, std::f64::consts::PI);
         m.scan(
@@ -309,17 +289,10 @@ mod tests {
             &scan(1.0, |_| f64::INFINITY),
             &[],
             |_| None,
-            |_| false,
+            &[],
         );
         assert!(m.is_empty(), "far");
-        m.scan(
-            &pose,
-            &pose,
-            &scan(2.0, |_| 0.5),
-            &wall,
-            |_| None,
-            |_| false,
-        );
+        m.scan(&pose, &pose, &scan(2.0, |_| 0.5), &wall, |_| None, &[]);
         let behind = Pose2::new(0.0, 0.0, std::f64::consts::PI);
         m.scan(
             &behind,
@@ -327,7 +300,7 @@ mod tests {
             &scan(2.0 + KEEP_S + 1.0, |_| f64::INFINITY),
             &[],
             |_| None,
-            |_| false,
+            &[],
         );
         assert!(m.is_empty(), "old");
     }
@@ -375,10 +348,10 @@ mod tests {
         let ahead = Pose2::new(1.0, 1.0, 0.0);
         let s = scan(0.0, |b| if b.abs() < 0.3 { 1.0 } else { f64::INFINITY });
         let echoes = [Point2::new(1.0, 0.0), Point2::new(1.0, 0.2)];
-        m.scan(&ahead, &ahead, &s, &echoes, |_| None, |p| p.y > 1.1);
+        m.scan(&ahead, &ahead, &s, &echoes, |_| None, &[false, true]);
         let back = Pose2::new(1.0, 1.0, std::f64::consts::PI);
         let empty = |t: f64| scan(t, |_| f64::INFINITY);
-        m.scan(&back, &back, &empty(1.0), &[], |_| None, |_| false);
+        m.scan(&back, &back, &empty(1.0), &[], |_| None, &[]);
         assert_eq!(m.unseen().len(), 2);
         m.scan(
             &back,
@@ -386,7 +359,7 @@ mod tests {
             &empty(MOVING_KEEP_S + 0.5),
             &[],
             |_| None,
-            |_| false,
+            &[],
         );
         let kept: Vec<Point2<f64>> = m.kept().collect();
         assert_eq!(kept, vec![Point2::new(2.0, 1.0)], "the still one");
@@ -407,22 +380,13 @@ mod tests {
             .map(|k| Point2::new(1.0 + if k % 2 == 0 { 0.05 } else { -0.05 }, 0.05 * k as f64))
             .chain([Point2::new(0.8, -0.3)])
             .collect();
-        m.scan(
-            &pose,
-            &pose,
-            &scan(0.0, |_| 1.0),
-            &echoes,
-            |_| None,
-            |_| false,
-        );
+        m.scan(&pose, &pose, &scan(0.0, |_| 1.0), &echoes, |_| None, &[]);
         let nearest = |m: &EchoMemory| m.kept().map(|p| p.x).fold(f64::INFINITY, f64::min);
         assert!(
             m.kept().filter(|p| p.y >= 0.0).any(|p| p.x < 0.96),
             "the wall not known yet: as the laser saw it"
         );
-        m.scan(&pose, &pose, &scan(1.0, |_| 1.0), &echoes, wall_at, |_| {
-            false
-        });
+        m.scan(&pose, &pose, &scan(1.0, |_| 1.0), &echoes, wall_at, &[]);
         assert!(m.kept().filter(|p| p.y >= 0.0).all(|p| p.x == 1.0));
         assert_eq!(nearest(&m), 0.8, "the box");
         assert!(m.kept().filter(|p| p.y >= 0.0).count() >= 20);

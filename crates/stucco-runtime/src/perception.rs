@@ -128,6 +128,35 @@ impl OwnWalls {
     }
 }
 
+/// The room's walls `est` holds, their doorways left open, thickened by
+/// `band_m` (the laser's noise): the echo memory keeps their
+/// echoes on them. None while the robot knows its place or the room
+/// too loosely to tell a wall's echo from something before it.
+fn own_walls(est: &Estimate, band_m: f64) -> OwnWalls {
+    let loose = est.position_sigma_m > FLOOR_MAX_SIGMA_M
+        || est.room_sigma_m.iter().fold(0.0f64, |a, &b| a.max(b)) > FLOOR_MAX_SIGMA_M;
+    if loose {
+        return OwnWalls::default();
+    }
+    let band = band_m + est.position_sigma_m;
+    let walls = room_walls(est)
+        .into_iter()
+        .map(|(name, g)| {
+            let doors = est
+                .doors
+                .iter()
+                .filter(|d| d.wall == name)
+                .map(|d| {
+                    let half = 0.5 * d.width_m.unwrap_or(0.0) + band + 3.0 * d.sigma_m;
+                    [d.position_m - half, d.position_m + half]
+                })
+                .collect();
+            (g, doors)
+        })
+        .collect();
+    OwnWalls { walls, band }
+}
+
 /// A connected group of floor cells: its lowest and highest cells.
 type FloorGroup = ((i64, i64), (i64, i64));
 
@@ -425,8 +454,18 @@ impl Perception {
 
     /// Counts the scan's echoes that lie inside the room, off its walls,
     /// in the floor map.
-    fn note_floor(&mut self, pts: &ScanPoints, twist: &stucco_core::Twist2, stamp: Stamp) {
-        let est = self.mission_estimate();
+    /// `moving` tells each of `pts` that is of something moving (a
+    /// person walking): no furniture. One who stands still for more than
+    /// the scans kept (half a second) is mapped as such, and stays: the
+    /// floor map only counts.
+    fn note_floor(
+        &mut self,
+        est: &Estimate,
+        pts: &ScanPoints,
+        moving: &[bool],
+        twist: &stucco_core::Twist2,
+        stamp: Stamp,
+    ) {
         // Only while the robot knows where it is in a room it has
         // measured: echoes placed from a loose estimate would smear walls
         // into the room.
@@ -443,24 +482,8 @@ impl Perception {
         let laser = then * self.mount;
         let [xs, ys] = est.room_m;
         let outline = (!est.corners.is_empty()).then(|| stucco_plan::Outline::new(&est.corners));
-        let cell = |p: &Point2<f64>| {
-            (
-                (p.x / FLOOR_CELL_M).floor() as i64,
-                (p.y / FLOOR_CELL_M).floor() as i64,
-            )
-        };
-        // Something that moved there (a person walking) is no furniture.
-        // One who stands still for more than the scans kept (half a
-        // second) is mapped as such, and stays: the floor map only counts.
-        let points: Vec<Point2<f64>> = pts
-            .points()
-            .iter()
-            .map(|q| laser.transform_point(&q.p))
-            .collect();
-        for p in points {
-            if self.recent.saw_through(&p) {
-                continue;
-            }
+        for (q, _) in pts.points().iter().zip(moving).filter(|(_, m)| !**m) {
+            let p = laser.transform_point(&q.p);
             let off = 0.12;
             let off_walls = match &outline {
                 Some(o) => o.clearance_m(&p) >= off,
@@ -469,42 +492,16 @@ impl Perception {
             if !off_walls {
                 continue;
             }
-            let n = self.room.floor.entry(cell(&p)).or_insert(0);
+            let c = (
+                (p.x / FLOOR_CELL_M).floor() as i64,
+                (p.y / FLOOR_CELL_M).floor() as i64,
+            );
+            let n = self.room.floor.entry(c).or_insert(0);
             *n += 1;
             if *n == FLOOR_HITS {
                 self.room.floor_occupied += 1;
             }
         }
-    }
-
-    /// The room's walls as the filter holds them, their doorways left
-    /// open, thickened by the laser's noise: the echo memory keeps their
-    /// echoes on them. None while the robot knows its place or the room
-    /// too loosely to tell a wall's echo from something before it.
-    fn own_walls(&self) -> OwnWalls {
-        let est = self.mission_estimate();
-        let loose = est.position_sigma_m > FLOOR_MAX_SIGMA_M
-            || est.room_sigma_m.iter().fold(0.0f64, |a, &b| a.max(b)) > FLOOR_MAX_SIGMA_M;
-        if loose {
-            return OwnWalls::default();
-        }
-        let band = self.wall_band_m + est.position_sigma_m;
-        let walls = room_walls(&est)
-            .into_iter()
-            .map(|(name, g)| {
-                let doors = est
-                    .doors
-                    .iter()
-                    .filter(|d| d.wall == name)
-                    .map(|d| {
-                        let half = 0.5 * d.width_m.unwrap_or(0.0) + band + 3.0 * d.sigma_m;
-                        [d.position_m - half, d.position_m + half]
-                    })
-                    .collect();
-                (g, doors)
-            })
-            .collect();
-        OwnWalls { walls, band }
     }
 
     /// Lets openings seen in the same place of a wall, scan after scan,
@@ -842,7 +839,25 @@ impl Perception {
                 }
             }
             let robot_twist = twist_at(&self.samples, scan.stamp, &self.odometry);
-            self.note_floor(&pts, &robot_twist, scan.stamp);
+            // The echoes are in the laser's frame at the scan's first beam:
+            // placed from the pose then (the pose now, after the period's
+            // odometry, is a few degrees on in a turn, and put a table's
+            // leg 20 cm from where it stands: measured). Each is told
+            // moving or not once, for the floor map and the echo memory.
+            let (x, _, at) = self.room.ekf.at_last_scan();
+            let placed = (at == scan.stamp).then(|| Pose2::new(x[0], x[1], x[2]));
+            let moving: Vec<bool> = match placed {
+                Some(pose) => {
+                    let sensor = pose * self.mount;
+                    pts.points()
+                        .iter()
+                        .map(|q| self.recent.saw_through(&sensor.transform_point(&q.p)))
+                        .collect()
+                }
+                None => vec![false; pts.points().len()],
+            };
+            let est = self.mission_estimate();
+            self.note_floor(&est, &pts, &moving, &robot_twist, scan.stamp);
             if self
                 .room
                 .floor_groups
@@ -858,25 +873,12 @@ impl Perception {
                     .iter()
                     .map(|q| self.mount.transform_point(&q.p)),
             );
-            // The echoes are in the laser's frame at the scan's first beam:
-            // placed from the pose then (the pose now, after the period's
-            // odometry, is a few degrees on in a turn, and put a table's
-            // leg 20 cm from where it stands: measured).
-            let (x, _, at) = self.room.ekf.at_last_scan();
-            if at == scan.stamp {
-                let pose = Pose2::new(x[0], x[1], x[2]);
+            if let Some(pose) = placed {
                 let echoes: Vec<Point2<f64>> = pts.points().iter().map(|q| q.p).collect();
-                let walls = self.own_walls();
+                let walls = own_walls(&est, self.wall_band_m);
                 let sensor = pose * self.mount;
-                let recent = &self.recent;
-                self.echoes.scan(
-                    &pose,
-                    &sensor,
-                    scan,
-                    &echoes,
-                    |p| walls.place(p),
-                    |p| recent.saw_through(p),
-                );
+                self.echoes
+                    .scan(&pose, &sensor, scan, &echoes, |p| walls.place(p), &moving);
                 self.recent.push(sensor, scan);
             }
         }
@@ -1322,11 +1324,21 @@ mod tests {
     }
 
     /// [`at_the_apartments_start`] with the simulator's seed.
-    #[allow(clippy::expect_used)]
     fn at_the_apartments_start_seeded(seed: u64) -> (Robot<Simulator>, Pose2) {
+        at_the_apartments_start_with(seed, |_| {})
+    }
+
+    /// [`at_the_apartments_start_seeded`] in the apartment as `edit`
+    /// leaves it.
+    #[allow(clippy::expect_used)]
+    fn at_the_apartments_start_with(
+        seed: u64,
+        edit: impl FnOnce(&mut WorldSpec),
+    ) -> (Robot<Simulator>, Pose2) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../sim/worlds/apartment.toml");
-        let world = WorldSpec::load(&path).expect("the apartment");
+        let mut world = WorldSpec::load(&path).expect("the apartment");
+        edit(&mut world);
         let start = Pose2::new(
             world.robot.at[0],
             world.robot.at[1],
@@ -1342,25 +1354,9 @@ mod tests {
     }
 
     /// What the robot standing at the apartment's start maps on the
-    /// floor in `seconds`, with `people` walking about.
-    #[allow(clippy::expect_used)]
+    /// floor in `seconds`, with `people` (alone) walking about.
     fn floor_seen_with(people: Vec<stucco_sim::PersonSpec>, seconds: f64) -> Vec<Obstacle> {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../sim/worlds/apartment.toml");
-        let mut world = WorldSpec::load(&path).expect("the apartment");
-        world.people = people;
-        let start = Pose2::new(
-            world.robot.at[0],
-            world.robot.at[1],
-            world.robot.heading_deg.to_radians(),
-        );
-        let x0 = RoomState::new(start.x, start.y, start.theta, 5.0, 2.85);
-        let cfg = SimConfig::default();
-        let spec = cfg.robot();
-        let sim = Simulator::new(&world, cfg, Some(5));
-        let perception =
-            Perception::new(&spec, x0, [0.01, 0.01], sim.now()).expect("valid settings");
-        let mut robot = idle_robot(sim, perception, &spec);
+        let (mut robot, _) = at_the_apartments_start_with(5, |w| w.people = people);
         for _ in 0..(seconds / DT_S) as usize {
             drive(&mut robot, 0.0, 0.0);
         }

@@ -270,6 +270,25 @@ mod tests {
                 command: OperatorCommand::Resume,
                 reason: "not paused".to_owned(),
             },
+            EventKind::StationDeferred {
+                task: 2,
+                station: 7,
+            },
+            EventKind::BehaviourStarted {
+                task: 2,
+                behaviour: "reverse".to_owned(),
+                goal: Some([1.5, 0.25, -90.0]),
+            },
+            EventKind::TaskFailed {
+                task: 2,
+                reason: "held".to_owned(),
+                failure: TaskFailure::PositionTooLoose {
+                    station: 3,
+                    sigma_m: 0.015,
+                    limit_m: 0.01,
+                    waited_s: 10.0,
+                },
+            },
         ];
         for (k, kind) in kinds.into_iter().enumerate() {
             let event = Event {

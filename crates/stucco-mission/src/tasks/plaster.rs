@@ -560,54 +560,22 @@ impl Task for Plaster {
             self.ways.replace(Vec::new());
             return true;
         }
-        // On the way to a plastering station that no way was found clear
-        // to (a hall too narrow to turn across): the station is given up,
-        // what only it reached reported unreachable, and the way to the
-        // next one planned.
-        if blocked_s > REPLAN_AFTER_S
-            && let Some(run) = self.run.as_mut()
+        // On the way to a station, held: where no way was found clear to
+        // it (a hall too narrow to turn across), given up at once, what
+        // only it reached reported unreachable; on a way found clear
+        // (someone standing in it; a wall nearer the station than the
+        // field lets the robot come), after half the supervisor's
+        // timeout (long enough for someone to walk past, and the task's
+        // own decision before the supervisor's), put last, and given up
+        // when held again, rather than the job failing with most of it
+        // undone. Then the way to the next one is planned.
+        if let Some(run) = self.run.as_mut()
             && matches!(run.phase, Phase::Moving)
-            && run.way_unchecked
+            && ((run.way_unchecked && blocked_s > REPLAN_AFTER_S)
+                || blocked_s > 0.5 * config.safety.blocked_timeout_s)
         {
             let station = run.cursor.station;
-            if let Some(lost) = run.give_up_station() {
-                cx.emit(EventKind::StationGivenUp {
-                    task: index,
-                    station,
-                    unreachable_m2: lost,
-                });
-            }
-            let from = est.pose;
-            let clearance = pivot_clearance(config);
-            self.ways.replace(next_station_way(
-                config,
-                clearance,
-                run,
-                &from,
-                self.spec.speed_mps,
-            ));
-            // None left: the task ends where the robot stands, and the
-            // next task's way starts there.
-            if run.finished() {
-                run.phase = Phase::Leaving;
-            }
-            // The plan on disk and the checkpoint's cursor must name the
-            // same stations.
-            cx.effects.checkpoint = true;
-            return true;
-        }
-        // On a way found clear that stays blocked (someone standing in
-        // it; a wall nearer the station than the field lets the robot
-        // come): the station is put last, and given up when blocked
-        // again, rather than the job failing with most of it undone.
-        // Half the supervisor's timeout: long enough for someone to walk
-        // past, and the task's own decision before the supervisor's.
-        if blocked_s > 0.5 * config.safety.blocked_timeout_s
-            && let Some(run) = self.run.as_mut()
-            && matches!(run.phase, Phase::Moving)
-        {
-            let station = run.cursor.station;
-            if run.defer_station() {
+            if !run.way_unchecked && run.defer_station() {
                 cx.emit(EventKind::StationDeferred {
                     task: index,
                     station,
@@ -627,9 +595,13 @@ impl Task for Plaster {
                 &est.pose,
                 self.spec.speed_mps,
             ));
+            // None left: the task ends where the robot stands, and the
+            // next task's way starts there.
             if run.finished() {
                 run.phase = Phase::Leaving;
             }
+            // The plan on disk and the checkpoint's cursor must name the
+            // same stations.
             cx.effects.checkpoint = true;
             return true;
         }
