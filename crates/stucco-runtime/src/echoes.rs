@@ -9,10 +9,10 @@
 //!
 //! An echo of the room's own walls is kept on the wall, where the room
 //! filter holds it to the millimetre, not where the laser's range noise
-//! scattered it: kept as it came, the memory would hold for minutes the
-//! one echo in a hundred that fell 4–5 cm inside a wall, and a way
-//! planned to back past that wall with the field's margin would stay
-//! blocked (measured: the end walls of generated corridors). A jog
+//! scattered it: kept as it came, the memory held for minutes the rare
+//! echo that fell 4–9 cm inside a wall, and a way planned to back past
+//! that wall with the field's margin stayed blocked (the end walls of
+//! generated corridors, seen in their failures). A jog
 //! backwards is still stopped by the wall.
 
 use nalgebra::Point2;
