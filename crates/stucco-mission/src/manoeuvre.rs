@@ -197,7 +197,8 @@ impl<'a> Space<'a> {
                     (0..n).all(|k| self.free_point(&(a + (b - a) * (k as f64 / n as f64))))
                 }));
         walls_clear && {
-            let f = Vector2::new(theta.cos(), theta.sin());
+            // The heading's unit vector: the rotation's first column.
+            let f = r.matrix().column(0).into_owned();
             let c = p + f * (0.5 * (ahead + back));
             rect_clear(
                 self.obstacles,

@@ -10,7 +10,7 @@ use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::ExecutiveConfig;
 use crate::model::{Estimate, walls_or_all};
 use crate::task::WallName;
-use stucco_core::{DriveCommand, Pose2, VehicleSpec};
+use stucco_core::{DriveCommand, Obstacle, Pose2, VehicleSpec};
 
 /// Seconds a `map_room` loop driven corner to corner stands before its
 /// first leg: the floor map needs a score of echoes in a cell (the scans
@@ -109,7 +109,9 @@ impl Task for MapRoom {
             return TaskStep::Done;
         }
         if elapsed > timeout_s {
-            return TaskStep::Failed(if unseen.is_empty() {
+            return TaskStep::Failed(if self.legs.as_ref().is_some_and(Legs::stuck) {
+                TaskFailure::NoWayToCorners
+            } else if unseen.is_empty() {
                 TaskFailure::RoomSizeLoose {
                     sigma_m: loose.iter().fold(0.0f64, |m, &s| m.max(s)),
                     timeout_s,
@@ -133,8 +135,11 @@ impl Task for MapRoom {
             if unseen.is_empty() && loose.is_empty() {
                 return TaskStep::Done;
             }
-            if legs.stuck() {
-                return TaskStep::Failed(TaskFailure::NoWayToCorners);
+            // No way reached a corner: the robot waits for the floor map
+            // to change (someone standing in the way steps off) until the
+            // timeout.
+            if legs.stuck_on_map(est) {
+                return TaskStep::Drive(DriveCommand::STOP);
             }
             let way = legs.next(config, est).unwrap_or_default();
             if way.is_empty() {
@@ -215,8 +220,13 @@ pub(crate) struct Legs {
     pub(crate) under_way: Option<usize>,
     /// Times the leg under way was planned again.
     replans: usize,
-    /// Legs in a row that no clear way reached.
+    /// Legs in a row that no clear way reached (a corner the robot stood
+    /// at already neither counts nor breaks the row).
     unreached: usize,
+    /// What the floor map held when no corner was reached: the legs are
+    /// planned again only once it holds something else (each try is a
+    /// search through every way about the room).
+    stuck_on: Option<Vec<Obstacle>>,
     speed_mps: f64,
 }
 
@@ -229,6 +239,7 @@ impl Legs {
             under_way: None,
             replans: 0,
             unreached: 0,
+            stuck_on: None,
             speed_mps,
         }
     }
@@ -236,6 +247,28 @@ impl Legs {
     /// True when no clear way reached any corner the last time round.
     pub(crate) fn stuck(&self) -> bool {
         self.unreached >= self.corners.len().max(1)
+    }
+
+    /// True when the legs are [`Legs::stuck`] on the floor map `est` holds:
+    /// no clear way reached a corner on this map. A map that changed since
+    /// (what blocked the ways moved, or was seen to be less) lets them be
+    /// planned again.
+    fn stuck_on_map(&mut self, est: &Estimate) -> bool {
+        if !self.stuck() {
+            return false;
+        }
+        match &self.stuck_on {
+            Some(held) if floor_changed(held, &est.obstacles) => {
+                self.stuck_on = None;
+                self.unreached = 0;
+                false
+            }
+            Some(_) => true,
+            None => {
+                self.stuck_on = Some(est.obstacles.clone());
+                true
+            }
+        }
     }
 
     /// The next leg's way from where the robot stands; `None` when every
@@ -258,10 +291,12 @@ impl Legs {
             self.corners = corners.to_vec();
         }
         let way = self.leg(config, est, next);
-        if way.is_some() {
-            self.unreached = 0;
-        } else {
-            self.unreached += 1;
+        match &way {
+            // Standing at the corner: nothing reached, nothing tried (a
+            // robot at one corner that no way leaves is stuck there).
+            Some(w) if w.is_empty() => {}
+            Some(_) => self.unreached = 0,
+            None => self.unreached += 1,
         }
         Some(way.unwrap_or_default())
     }
@@ -307,6 +342,25 @@ impl Legs {
         })
     }
 }
+
+/// True when the floor map `now` holds something `then` did not, or no
+/// longer holds something it did: a piece more or less, or a side of one
+/// moved by more than [`FLOOR_MOVED_M`] (less is the map's own jitter: a
+/// cell more of an edge, the room's size refined).
+fn floor_changed(then: &[Obstacle], now: &[Obstacle]) -> bool {
+    then.len() != now.len()
+        || then.iter().zip(now).any(|(a, b)| {
+            a.min_m
+                .iter()
+                .chain(&a.max_m)
+                .zip(b.min_m.iter().chain(&b.max_m))
+                .any(|(p, q)| (p - q).abs() > FLOOR_MOVED_M)
+        })
+}
+
+/// A side of something on the floor map moved by more than this has
+/// moved, m (the map's cells are 5 cm).
+const FLOOR_MOVED_M: f64 = 0.1;
 
 /// A robot this near a loop's corner is at it, m.
 const AT_CORNER_M: f64 = 0.1;
@@ -594,5 +648,21 @@ mod tests {
             survey_loop(Some(&given), 1.0, [1.2, 1.2], 1.0).unwrap_or_default(),
             given
         );
+    }
+
+    #[test]
+    fn the_floor_map_has_changed_when_a_piece_comes_goes_or_moves_not_when_it_jitters() {
+        let table = |x: f64| Obstacle {
+            min_m: [x, 1.0],
+            max_m: [x + 0.8, 1.6],
+            height_m: 0.8,
+        };
+        let map = [table(1.0)];
+        // A cell more of an edge, the room's size refined: the same map.
+        assert!(!floor_changed(&map, &[table(1.05)]));
+        // Moved, gone, or another one seen: changed.
+        assert!(floor_changed(&map, &[table(1.2)]));
+        assert!(floor_changed(&map, &[]));
+        assert!(floor_changed(&map, &[table(1.0), table(3.0)]));
     }
 }
