@@ -434,6 +434,10 @@ fn on_face(rays: &[(f64, bool)], z: [f64; 2]) -> bool {
     n > 0 && face as f64 >= ON_FACE_SHARE * n as f64
 }
 
+/// Two echoes this near in height lie on one level surface (the camera's
+/// range noise along a slant ray), m.
+const LEVEL_M: f64 = 0.025;
+
 /// Share of the rays at a hole's heights that must meet the face beside
 /// it for that side to be its edge.
 const ON_FACE_SHARE: f64 = 0.8;
@@ -509,20 +513,32 @@ fn gaps_in(
         // Each edge lies between its face ray and its first through ray.
         // Rays that pass the face just inside the hole go on to meet the
         // sill's top or the lintel's underside within the wall's thickness:
-        // two of them echoing at one height (a horizontal surface, not the
-        // glass of a glazed window, which echoes at one depth) mark the
-        // edge exactly.
+        // two of them echoing at one height and apart in depth (a
+        // horizontal surface; not the glass of a glazed window, which
+        // echoes at one depth, its heights the rays' spacing apart) mark
+        // the edge exactly. The ray taken for the face may be one of them:
+        // met within the face's tolerance of it (a step the camera's noise
+        // hides), taken for the face it put the edge that far into the
+        // hole at its slant (a head 2 cm low).
+        let depth =
+            |k: usize| (profile.ranges_m[k] * profile.elevations_rad[k].cos() - to_face) * c;
         let reveal = |k: usize| {
-            let d = (profile.ranges_m[k] * profile.elevations_rad[k].cos() - to_face) * c;
+            let d = depth(k);
             d > cfg.face_tolerance_m && d <= cfg.reveal_depth_m
+        };
+        let level = |a: usize, b: usize| {
+            let dz = (hit_z[a] - hit_z[b]).abs();
+            dz <= LEVEL_M && (depth(a) - depth(b)).abs() > dz
         };
         let edge = |face: usize, through: usize, next: Option<usize>| {
             if let Some(n) = next
                 && reveal(through)
                 && reveal(n)
-                && (hit_z[through] - hit_z[n]).abs() <= 0.025
+                && level(through, n)
             {
                 0.5 * (hit_z[through] + hit_z[n])
+            } else if reveal(through) && level(face, through) {
+                0.5 * (hit_z[face] + hit_z[through])
             } else {
                 0.5 * (face_z[face] + face_z[through])
             }
@@ -597,6 +613,23 @@ mod tests {
             elevations_rad: elevations,
             ranges_m: ranges,
         }
+    }
+
+    /// [`profile`] of a glazed window, its glass halfway into the wall
+    /// returning the rays that meet it within 25° of square on.
+    fn glazed(along: f64, distance: f64, window: [f64; 4]) -> RangeProfile {
+        let mut p = profile(along, distance, window);
+        let glass = distance + 0.075;
+        for (r, &e) in p.ranges_m.iter_mut().zip(&p.elevations_rad) {
+            let (s, c) = e.sin_cos();
+            let z = 1.0 + glass * s / c;
+            let through = (window[0]..=window[1]).contains(&along)
+                && (window[2]..window[3]).contains(&(1.0 + distance * s / c));
+            if through && c >= 0.9 && (window[2]..window[3]).contains(&z) {
+                *r = glass / c;
+            }
+        }
+        p
     }
 
     fn pose(along: f64, distance: f64) -> ProfilePose {
@@ -695,6 +728,25 @@ mod tests {
         // spacing, 1.4 cm.
         assert!((w.sill_head_m[1] - 2.1).abs() < 1e-9, "{w:?}");
         assert!((w.sill_head_m[0] - 0.9).abs() <= 0.007, "{w:?}");
+    }
+
+    #[test]
+    fn the_head_is_where_rays_meet_the_lintel_not_the_glass_nor_the_face() {
+        // From close up under a glazed window's head: a ray meets the
+        // lintel's underside 3.2 cm behind the face (within the face's
+        // tolerance: taken for the face, it put the head 1.9 cm low), the
+        // next 7.2 cm behind it at the same height; below them the rays
+        // meet the glass square on, at one depth, 1.3 cm apart in height.
+        let window = [1.0, 2.0, 0.7, 1.2];
+        let mut f = WindowFinder::new(WindowConfig::default());
+        for k in 0..150 {
+            let u = 0.5 + 0.02 * k as f64;
+            f.add(&glazed(u, 0.5, window), &pose(u, 0.5));
+        }
+        let w = f.windows();
+        assert_eq!(w.len(), 1, "{w:?}");
+        // Half the rays' spacing at the face there.
+        assert!((w[0].sill_head_m[1] - 1.2).abs() <= 0.0075, "{w:?}");
     }
 
     #[test]

@@ -92,13 +92,11 @@ struct RoomView {
     tool_wall: Option<usize>,
     /// Heights of the ceiling the camera measured, m (the latest).
     ceiling_m: std::collections::VecDeque<f64>,
-    /// Scan echoes off the walls, counted in cells of the room frame.
-    floor: std::collections::BTreeMap<(i64, i64), u32>,
-    /// Cells of `floor` with [`FLOOR_HITS`] echoes or more: a count only
-    /// grows, so this changes exactly when the set of such cells does.
-    floor_occupied: usize,
-    /// The connected groups of those cells, as of `floor_occupied`: their
-    /// lowest and highest cells.
+    /// What stands on the floor: the log-odds of each cell of the room
+    /// frame, from the scans' echoes and the beams that passed.
+    floor: FloorMap,
+    /// The connected groups of its occupied cells, as of its version:
+    /// their lowest and highest cells.
     floor_groups: Option<(usize, Vec<FloorGroup>)>,
     /// What stands on the floor, as of the last scan.
     floor_boxes: Vec<Obstacle>,
@@ -160,6 +158,156 @@ fn own_walls(est: &Estimate, band_m: f64) -> OwnWalls {
 /// A connected group of floor cells: its lowest and highest cells.
 type FloorGroup = ((i64, i64), (i64, i64));
 
+/// The floor of a room as an occupancy grid: the log-odds that something
+/// stands in each cell (`FLOOR_CELL_M`, room frame), raised by each echo
+/// off the walls that falls in it, lowered by each beam that passes
+/// through it. What stands stays; what moved on (a person walking) is
+/// cleared by the beams that then pass where it stood.
+#[derive(Clone, Debug)]
+struct FloorMap {
+    /// The cell indices of the grid's first cell (`floor(x / cell)`).
+    first: (i64, i64),
+    cells: [usize; 2],
+    odds: Vec<f32>,
+    /// Bumped each time a cell becomes occupied or stops being.
+    version: usize,
+}
+
+/// A floor cell's log-odds rises this much with an echo in it...
+const FLOOR_HIT: f32 = 1.0;
+/// ...and falls this much with a beam passing through it.
+const FLOOR_MISS: f32 = 0.5;
+/// Its bounds: what stood a long time clears in a few seconds of beams
+/// once gone.
+const FLOOR_ODDS: [f32; 2] = [-10.0, 40.0];
+/// Beams lower the cells they pass up to this far from the laser, m.
+const FLOOR_MISS_RANGE_M: f64 = 5.0;
+/// The grid reaches this far past the room's walls as first known, m.
+const FLOOR_MARGIN_M: f64 = 1.0;
+
+impl FloorMap {
+    fn new(room_m: [f64; 2]) -> Self {
+        let margin = (FLOOR_MARGIN_M / FLOOR_CELL_M).ceil() as i64;
+        let cells =
+            room_m.map(|s| (s.max(0.0) / FLOOR_CELL_M).ceil() as usize + 2 * margin as usize);
+        FloorMap {
+            first: (-margin, -margin),
+            cells,
+            odds: vec![0.0; cells[0] * cells[1]],
+            version: 0,
+        }
+    }
+
+    /// The grid index of cell `c`, if the grid holds it.
+    fn index(&self, c: (i64, i64)) -> Option<usize> {
+        let (i, j) = (c.0 - self.first.0, c.1 - self.first.1);
+        (i >= 0 && j >= 0 && (i as usize) < self.cells[0] && (j as usize) < self.cells[1])
+            .then(|| j as usize * self.cells[0] + i as usize)
+    }
+
+    fn cell(p: &Point2<f64>) -> (i64, i64) {
+        (
+            (p.x / FLOOR_CELL_M).floor() as i64,
+            (p.y / FLOOR_CELL_M).floor() as i64,
+        )
+    }
+
+    fn add(&mut self, k: usize, by: f32) {
+        let threshold = FLOOR_HITS as f32;
+        let before = self.odds[k];
+        let after = (before + by).clamp(FLOOR_ODDS[0], FLOOR_ODDS[1]);
+        self.odds[k] = after;
+        if (before >= threshold) != (after >= threshold) {
+            self.version += 1;
+        }
+    }
+
+    /// An echo at `p`.
+    fn hit(&mut self, p: &Point2<f64>) {
+        if let Some(k) = self.index(Self::cell(p)) {
+            self.add(k, FLOOR_HIT);
+        }
+    }
+
+    /// A beam from `from` to its echo at `to`: the cells it crosses before
+    /// the echo's, up to `FLOOR_MISS_RANGE_M` (Amanatides–Woo).
+    fn pass(&mut self, from: &Point2<f64>, to: &Point2<f64>) {
+        let d = to - from;
+        let length = d.norm();
+        if length < 1e-9 {
+            return;
+        }
+        let reach = length.min(FLOOR_MISS_RANGE_M);
+        let end = Self::cell(to);
+        let (mut c, u) = (Self::cell(from), d / length);
+        let step = (
+            if u.x >= 0.0 { 1 } else { -1 },
+            if u.y >= 0.0 { 1 } else { -1 },
+        );
+        let edge = |c: i64, s: i64, o: f64| (c + i64::from(s > 0)) as f64 * FLOOR_CELL_M - o;
+        let mut t_max = (
+            if u.x.abs() > 1e-12 {
+                edge(c.0, step.0, from.x) / u.x
+            } else {
+                f64::INFINITY
+            },
+            if u.y.abs() > 1e-12 {
+                edge(c.1, step.1, from.y) / u.y
+            } else {
+                f64::INFINITY
+            },
+        );
+        let t_delta = (
+            if u.x.abs() > 1e-12 {
+                FLOOR_CELL_M / u.x.abs()
+            } else {
+                f64::INFINITY
+            },
+            if u.y.abs() > 1e-12 {
+                FLOOR_CELL_M / u.y.abs()
+            } else {
+                f64::INFINITY
+            },
+        );
+        loop {
+            if c == end {
+                break;
+            }
+            if let Some(k) = self.index(c) {
+                self.add(k, -FLOOR_MISS);
+            }
+            if t_max.0 < t_max.1 {
+                if t_max.0 > reach {
+                    break;
+                }
+                c.0 += step.0;
+                t_max.0 += t_delta.0;
+            } else {
+                if t_max.1 > reach {
+                    break;
+                }
+                c.1 += step.1;
+                t_max.1 += t_delta.1;
+            }
+        }
+    }
+
+    /// The cells something stands in.
+    fn occupied(&self) -> impl Iterator<Item = (i64, i64)> + '_ {
+        let threshold = FLOOR_HITS as f32;
+        self.odds
+            .iter()
+            .enumerate()
+            .filter(move |(_, o)| **o >= threshold)
+            .map(|(k, _)| {
+                (
+                    self.first.0 + (k % self.cells[0]) as i64,
+                    self.first.1 + (k / self.cells[0]) as i64,
+                )
+            })
+    }
+}
+
 /// A door of the room filter: its width when measured, the door of the
 /// floor plan it is.
 #[derive(Clone, Copy, Debug)]
@@ -196,8 +344,13 @@ impl RoomView {
     /// The room's corners as the filter has them (none for a rectangle)
     /// and its size (a rectangle's, or the box of its corners).
     fn geometry(&self) -> (Vec<[f64; 2]>, [f64; 2]) {
-        let (x, _) = self.ekf.now();
-        let shape = self.ekf.shape();
+        Self::geometry_of(&self.ekf)
+    }
+
+    /// [`RoomView::geometry`] as `ekf` has it.
+    fn geometry_of(ekf: &RoomEkf) -> (Vec<[f64; 2]>, [f64; 2]) {
+        let (x, _) = ekf.now();
+        let shape = ekf.shape();
         if !shape.is_polygon() {
             return (Vec::new(), [x[3], x[4]]);
         }
@@ -216,6 +369,7 @@ impl RoomView {
                 .map(|_| WindowFinder::new(WindowConfig::default()))
                 .collect()
         };
+        let floor = FloorMap::new(Self::geometry_of(&ekf).1);
         RoomView {
             ekf,
             door_candidates: Vec::new(),
@@ -228,8 +382,7 @@ impl RoomView {
             tool_windows: finders(),
             tool_wall: None,
             ceiling_m: std::collections::VecDeque::new(),
-            floor: std::collections::BTreeMap::new(),
-            floor_occupied: 0,
+            floor,
             floor_groups: None,
             floor_boxes: Vec::new(),
         }
@@ -263,7 +416,8 @@ const FLOOR_MAX_SIGMA_M: f64 = 0.02;
 /// scatter (one beam in 30,000 farther; the echo memory forgets one that
 /// a later beam passes 10 cm beyond).
 const WALL_BAND_SIGMAS: f64 = 4.0;
-/// Echoes a cell needs to count as something standing there.
+/// Echoes a cell needs, net of the beams that passed through it, to
+/// count as something standing there.
 const FLOOR_HITS: u32 = 20;
 /// Pieces of furniture nearer each other than this stand as one, m.
 const FURNITURE_GAP_M: f64 = 0.9;
@@ -370,13 +524,7 @@ impl Perception {
     /// kept finding echoes off the walls, in the order of their first
     /// cells.
     fn floor_groups(&self) -> Vec<FloorGroup> {
-        let cells: Vec<(i64, i64)> = self
-            .room
-            .floor
-            .iter()
-            .filter(|(_, n)| **n >= FLOOR_HITS)
-            .map(|(c, _)| *c)
-            .collect();
+        let cells: Vec<(i64, i64)> = self.room.floor.occupied().collect();
         let set: std::collections::BTreeSet<(i64, i64)> = cells.iter().copied().collect();
         let mut seen = std::collections::BTreeSet::new();
         let mut out = Vec::new();
@@ -408,7 +556,7 @@ impl Perception {
     pub fn floor_obstacles(&self) -> Vec<Obstacle> {
         let fresh;
         let groups = match &self.room.floor_groups {
-            Some((n, g)) if *n == self.room.floor_occupied => g,
+            Some((n, g)) if *n == self.room.floor.version => g,
             _ => {
                 fresh = self.floor_groups();
                 &fresh
@@ -452,12 +600,12 @@ impl Perception {
         out.into_iter().map(|(o, _)| o).collect()
     }
 
-    /// Counts the scan's echoes that lie inside the room, off its walls,
-    /// in the floor map.
+    /// Takes the scan into the floor map: each beam lowers the cells it
+    /// passed, each echo inside the room, off its walls, raises its own.
     /// `moving` tells each of `pts` that is of something moving (a
-    /// person walking): no furniture. One who stands still for more than
-    /// the scans kept (half a second) is mapped as such, and stays: the
-    /// floor map only counts.
+    /// person walking): no furniture, its beam only clears. One who
+    /// stands still for more than the scans kept (half a second) is
+    /// mapped, and cleared by the beams that pass once they walk on.
     fn note_floor(
         &mut self,
         est: &Estimate,
@@ -482,24 +630,19 @@ impl Perception {
         let laser = then * self.mount;
         let [xs, ys] = est.room_m;
         let outline = (!est.corners.is_empty()).then(|| stucco_plan::Outline::new(&est.corners));
-        for (q, _) in pts.points().iter().zip(moving).filter(|(_, m)| !**m) {
+        let from = laser.position();
+        for (q, moving) in pts.points().iter().zip(moving) {
             let p = laser.transform_point(&q.p);
+            // Every beam clears what it passed; an echo off the walls
+            // is something standing.
+            self.room.floor.pass(&from, &p);
             let off = 0.12;
             let off_walls = match &outline {
                 Some(o) => o.clearance_m(&p) >= off,
                 None => p.x >= off && p.y >= off && p.x <= xs - off && p.y <= ys - off,
             };
-            if !off_walls {
-                continue;
-            }
-            let c = (
-                (p.x / FLOOR_CELL_M).floor() as i64,
-                (p.y / FLOOR_CELL_M).floor() as i64,
-            );
-            let n = self.room.floor.entry(c).or_insert(0);
-            *n += 1;
-            if *n == FLOOR_HITS {
-                self.room.floor_occupied += 1;
+            if off_walls && !moving {
+                self.room.floor.hit(&p);
             }
         }
     }
@@ -862,9 +1005,9 @@ impl Perception {
                 .room
                 .floor_groups
                 .as_ref()
-                .is_none_or(|(n, _)| *n != self.room.floor_occupied)
+                .is_none_or(|(n, _)| *n != self.room.floor.version)
             {
-                self.room.floor_groups = Some((self.room.floor_occupied, self.floor_groups()));
+                self.room.floor_groups = Some((self.room.floor.version, self.floor_groups()));
             }
             self.room.floor_boxes = self.floor_obstacles();
             self.obstacles.clear();
@@ -1573,7 +1716,7 @@ mod tests {
             drive(&mut robot, 0.3, std::f64::consts::FRAC_PI_2);
             let nav = robot.perception();
             if let Some((n, groups)) = &nav.room.floor_groups
-                && *n == nav.room.floor_occupied
+                && *n == nav.room.floor.version
             {
                 assert_eq!(groups, &nav.floor_groups(), "period {k}");
                 compared += 1;
