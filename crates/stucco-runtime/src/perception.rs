@@ -1508,9 +1508,7 @@ mod tests {
 
     /// A person pacing to and fro across the room in front of a robot
     /// standing still for a minute is not mapped where they walk: their
-    /// echoes are where the scans just before saw through. Where they
-    /// turn back (half a second on the same spot) they still are: the
-    /// floor map only counts (the log-odds map is the next step).
+    /// echoes are where the scans just before saw through.
     #[test]
     fn a_person_pacing_in_front_of_the_robot_is_not_mapped_where_they_walk() {
         let pacing = stucco_sim::PersonSpec {
@@ -1529,6 +1527,32 @@ mod tests {
             with.iter().filter(|o| on_the_path(o)).count()
                 <= without.iter().filter(|o| on_the_path(o)).count(),
             "mapped the person: {with:?} (without them: {without:?})"
+        );
+    }
+
+    /// Where a person pacing turns back (half a second on one spot, their
+    /// echoes still) they are mapped, and cleared again by the beams that
+    /// pass there once they walk on: a minute and a half leg later, with
+    /// them in the middle of their walk, nothing is mapped from one end
+    /// of it to the other that is not mapped without them.
+    #[test]
+    fn where_a_person_turned_back_is_cleared_once_they_walk_on() {
+        let pacing = stucco_sim::PersonSpec {
+            path: vec![[3.2, 0.5], [3.2, 2.3]],
+            speed_mps: 0.6,
+        };
+        // 20 legs of 3 s and half the next: in the middle, walking.
+        let (with, without) = (
+            floor_seen_with(vec![pacing], 61.5),
+            floor_seen_with(Vec::new(), 61.5),
+        );
+        let on_the_path = |o: &Obstacle| {
+            o.min_m[0] < 3.4 && o.max_m[0] > 3.0 && o.min_m[1] < 2.5 && o.max_m[1] > 0.3
+        };
+        assert!(
+            with.iter().filter(|o| on_the_path(o)).count()
+                <= without.iter().filter(|o| on_the_path(o)).count(),
+            "kept where the person turned back: {with:?} (without them: {without:?})"
         );
     }
 
