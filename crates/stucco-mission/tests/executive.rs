@@ -34,6 +34,8 @@ struct Robot {
     floor: Vec<stucco_plan::Obstacle>,
     /// The windows the cameras have found.
     windows: Vec<WindowEstimate>,
+    /// Scans each wall has been seen in.
+    walls_seen: Vec<usize>,
 }
 
 impl Robot {
@@ -51,6 +53,7 @@ impl Robot {
             position_sigma: 0.003,
             floor: Vec::new(),
             windows: Vec::new(),
+            walls_seen: vec![100; 4],
         }
     }
 
@@ -63,7 +66,7 @@ impl Robot {
             room_m: self.room_m,
             room_sigma_m: self.room_sigma,
             corners: Vec::new(),
-            walls_seen: vec![100; 4],
+            walls_seen: self.walls_seen.clone(),
             doors: self.doors.clone(),
             height_m: 2.6,
             windows: self.windows.clone(),
@@ -2766,6 +2769,41 @@ fn a_map_room_robot_at_a_corner_no_way_leaves_is_stuck_there() {
         "{reason}"
     );
     assert!((robot.pose.position() - Point2::new(0.5, 0.5)).norm() < 1e-6);
+}
+
+#[test]
+fn a_map_room_robot_held_with_a_wall_behind_it_turns_to_look_at_it() {
+    // A corridor 1.6 m wide, its loop end to end; furniture over its far
+    // end. The near end wall is behind the robot (the laser sees 135°
+    // either side of ahead): it turns on its spot toward it, sees it, and
+    // the room is known where it stands.
+    let mut robot = Robot::at(Pose2::new(1.0, 0.8, 0.0));
+    robot.room_m = [5.0, 1.6];
+    robot.floor = vec![stucco_plan::Obstacle {
+        min_m: [3.5, 0.3],
+        max_m: [4.5, 1.3],
+        height_m: 0.8,
+    }];
+    robot.walls_seen[WallName::WEST.index()] = 0;
+    let mut exec = executive(vec![map_room(Some(vec![[1.0, 0.8], [4.0, 0.8]]))], true);
+    for _ in 0..(60.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        robot.drive(out.drive);
+        let west = Pose2::new(0.0, 0.8, 0.0).position() - robot.pose.position();
+        let bearing = wrap_angle(west.y.atan2(west.x) - robot.pose.theta);
+        if bearing.abs() < 135f64.to_radians() {
+            robot.walls_seen[WallName::WEST.index()] += 1;
+        }
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    assert!(
+        (robot.pose.position() - Point2::new(1.0, 0.8)).norm() < 0.3,
+        "{:?}",
+        robot.pose
+    );
 }
 
 #[test]

@@ -8,7 +8,7 @@ use super::{
 };
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::ExecutiveConfig;
-use crate::model::{Estimate, walls_or_all};
+use crate::model::{Estimate, WallGeometry, walls_or_all};
 use crate::task::WallName;
 use stucco_core::{DriveCommand, Obstacle, Pose2, VehicleSpec};
 
@@ -31,6 +31,8 @@ pub(crate) struct MapRoom {
     ways: Behaviours,
     /// The loop driven corner to corner.
     legs: Option<Legs>,
+    /// Walls looked at from where the robot was held, unseen.
+    looked: Vec<WallName>,
 }
 
 impl MapRoom {
@@ -53,9 +55,72 @@ impl MapRoom {
             timeout_s,
             ways: Behaviours::default(),
             legs: None,
+            looked: Vec::new(),
         }
     }
+
+    /// The walls still to be seen.
+    fn unseen(&self, est: &Estimate) -> Vec<WallName> {
+        walls_or_all(self.walls.as_deref(), est)
+            .into_iter()
+            .filter(|w| {
+                est.walls_seen
+                    .get(w.index())
+                    .is_none_or(|&n| n < self.min_sightings)
+            })
+            .collect()
+    }
+
+    /// Held where it stands (no way reaches a corner, or someone stands
+    /// in the way): a look at the first wall still unseen not looked at
+    /// yet, turned toward it as far as a clear way turns the robot on its
+    /// spot (the laser does not see behind it: a corridor's end wall
+    /// behind a robot that someone pacing the corridor holds at the
+    /// other). The leg under way is planned again after it. True when a
+    /// look was queued.
+    fn look_at_unseen(&mut self, config: &ExecutiveConfig, est: &Estimate) -> bool {
+        for wall in self.unseen(est) {
+            if self.looked.contains(&wall) {
+                continue;
+            }
+            self.looked.push(wall);
+            if let Some(way) = look_at(config, est, wall, self.speed_mps) {
+                self.ways.replace(way);
+                if let Some(legs) = self.legs.as_mut() {
+                    legs.under_way = legs.under_way.and_then(|k| k.checked_sub(1));
+                }
+                return true;
+            }
+        }
+        false
+    }
 }
+
+/// The way that turns the robot on its spot toward the middle of `wall`,
+/// or failing that as far toward it as a clear way does, in steps of
+/// [`LOOK_STEP_RAD`] back toward its heading; `None` when it faces the
+/// wall within a step already, or no clear way turns it toward it at all.
+fn look_at(
+    config: &ExecutiveConfig,
+    est: &Estimate,
+    wall: WallName,
+    speed_mps: f64,
+) -> Option<Vec<Behaviour>> {
+    let g = WallGeometry::in_room(est, wall)?;
+    let middle = g.point(0.5 * g.length_m, 0.0);
+    let here = est.pose;
+    let toward = (middle.y - here.y).atan2(middle.x - here.x);
+    let off = stucco_core::wrap_angle(toward - here.theta);
+    let steps = (off.abs() / LOOK_STEP_RAD).ceil() as usize;
+    (0..steps).find_map(|k| {
+        let heading = stucco_core::wrap_angle(toward - off.signum() * LOOK_STEP_RAD * k as f64);
+        let goal = Pose2::new(here.x, here.y, heading);
+        planned_way(config, est, &here, &goal, speed_mps).map(|w| w.1)
+    })
+}
+
+/// Steps of a look turned short of facing its wall, rad.
+const LOOK_STEP_RAD: f64 = std::f64::consts::FRAC_PI_6;
 
 impl Task for MapRoom {
     fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
@@ -88,11 +153,7 @@ impl Task for MapRoom {
         let (timeout_s, max_size_sigma_m, speed_mps) =
             (self.timeout_s, self.max_size_sigma_m, self.speed_mps);
         let walls = &walls_or_all(self.walls.as_deref(), est);
-        let unseen: Vec<WallName> = walls
-            .iter()
-            .copied()
-            .filter(|w| est.walls_seen[w.index()] < self.min_sightings)
-            .collect();
+        let unseen = self.unseen(est);
         // A side of the room is measured when both its walls are.
         let listed = |a: WallName, b: WallName| walls.contains(&a) && walls.contains(&b);
         let sides = [
@@ -139,6 +200,9 @@ impl Task for MapRoom {
             // to change (someone standing in the way steps off) until the
             // timeout.
             if legs.stuck_on_map(est) {
+                if !unseen.is_empty() && self.look_at_unseen(config, est) {
+                    return TaskStep::Drive(self.ways.step(cx).unwrap_or(DriveCommand::STOP));
+                }
                 return TaskStep::Drive(DriveCommand::STOP);
             }
             let way = legs.next(config, est).unwrap_or_default();
@@ -182,6 +246,9 @@ impl Task for MapRoom {
     }
 
     fn blocked(&mut self, cx: &mut TaskCx<'_>, blocked_s: f64) -> bool {
+        if blocked_s > REPLAN_AFTER_S && self.look_at_unseen(cx.config, cx.est) {
+            return true;
+        }
         // So on a leg of a loop driven corner to corner.
         if blocked_s > REPLAN_AFTER_S
             && let Some(legs) = self.legs.as_mut()
