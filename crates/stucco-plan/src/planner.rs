@@ -448,7 +448,9 @@ impl Plan {
 
     /// Plasterable area no station reaches, m².
     pub fn unreachable_m2(&self) -> f64 {
-        self.unreachable.iter().map(|u| u.area_m2).sum()
+        // Folded from 0 (a float sum of nothing is -0, which the events
+        // then read as "-0.0").
+        self.unreachable.iter().fold(0.0, |a, u| a + u.area_m2)
     }
 
     /// Every pass with the index of its station.
