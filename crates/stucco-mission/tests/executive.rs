@@ -2807,6 +2807,56 @@ fn a_map_room_robot_held_with_a_wall_behind_it_turns_to_look_at_it() {
 }
 
 #[test]
+fn a_map_room_loop_blocked_by_a_box_seen_on_the_way_goes_round_it_corner_to_corner() {
+    // The loop 1 m inside the walls, turned on the move; a box on its
+    // first side, in the floor map only once the loop is planned (it
+    // takes the laser a while to map it). The loop goes on
+    // corner to corner, each leg planned round the box, instead of
+    // standing before it until the way is given up.
+    let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
+    robot.room_sigma = [0.05; 2];
+    let mut exec = executive(vec![map_room(None)], true);
+    let (lo, hi) = ([2.4, 0.6], [3.0, 1.4]);
+    let outline: Vec<Point2<f64>> = (0..=12)
+        .flat_map(|k| {
+            let t = k as f64 / 12.0;
+            let (x, y) = (lo[0] + t * (hi[0] - lo[0]), lo[1] + t * (hi[1] - lo[1]));
+            [
+                Point2::new(x, lo[1]),
+                Point2::new(x, hi[1]),
+                Point2::new(lo[0], y),
+                Point2::new(hi[0], y),
+            ]
+        })
+        .collect();
+    let mut beyond = false;
+    for step in 0..(90.0 / DT) as usize {
+        if step as f64 * DT > 1.0 && robot.floor.is_empty() {
+            robot.floor.push(stucco_plan::Obstacle {
+                min_m: lo,
+                max_m: hi,
+                height_m: 0.8,
+            });
+        }
+        // The box's outline in the robot's frame.
+        let seen: Vec<Point2<f64>> = outline
+            .iter()
+            .map(|p| robot.pose.inverse().transform_point(p))
+            .collect();
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        robot.drive(out.drive);
+        let p = robot.pose.position();
+        assert!(
+            !(p.x > lo[0] && p.x < hi[0] && p.y > lo[1] && p.y < hi[1]),
+            "{p:?}"
+        );
+        beyond |= p.x > 3.5;
+        assert!(!exec.mode().is_final(), "{:?}", exec.mode());
+    }
+    assert!(beyond, "never got past the box: {:?}", robot.pose);
+}
+
+#[test]
 fn a_second_coat_of_another_thickness_is_a_task_with_its_own_settings() {
     #[derive(serde::Deserialize)]
     struct File {

@@ -246,12 +246,36 @@ impl Task for MapRoom {
     }
 
     fn blocked(&mut self, cx: &mut TaskCx<'_>, blocked_s: f64) -> bool {
-        if blocked_s > REPLAN_AFTER_S && self.look_at_unseen(cx.config, cx.est) {
+        if blocked_s <= REPLAN_AFTER_S {
+            return false;
+        }
+        // A loop turned on the move (or the way to its start) that
+        // something blocks, seen only once the robot was in the room (a
+        // box beside the door it came in by): the loop goes on corner to
+        // corner from the end of the side it was on, each leg the planned
+        // way round what the map holds by then.
+        if self.legs.is_none()
+            && let Ok(corners) = survey_loop(
+                self.path.as_deref(),
+                self.inset_m,
+                cx.est.room_m,
+                pivot_clearance(cx.config),
+            )
+        {
+            let mut legs = Legs::new(corners, None, self.speed_mps);
+            legs.under_way = match self.ways.kind() {
+                Some(BehaviourKind::Path { segment, .. }) => Some(*segment),
+                _ => None,
+            };
+            self.legs = Some(legs);
+            self.ways.replace(Vec::new());
+            return true;
+        }
+        if self.look_at_unseen(cx.config, cx.est) {
             return true;
         }
         // So on a leg of a loop driven corner to corner.
-        if blocked_s > REPLAN_AFTER_S
-            && let Some(legs) = self.legs.as_mut()
+        if let Some(legs) = self.legs.as_mut()
             && let Some(q) = legs.again(cx.config, cx.est)
         {
             self.ways.replace(q);
