@@ -42,12 +42,16 @@ fn worldgen_writes_a_world_its_drawing_and_a_job() {
 #[test]
 fn the_buildings_study_runs_each_job_or_says_why_it_could_not() {
     let dir = tempfile::tempdir().unwrap();
-    // Seeds 0 and 1: L, T, chimney breasts and walls at an angle off a
-    // corridor; each job is run (stopped after 10 simulated minutes: the
-    // study's plumbing is under test here, its figures are the study's),
-    // and one not done says why, with its true scores.
-    let rows = stucco_cli::run_buildings(0..2, dir.path(), Some(600.0)).unwrap();
-    assert_eq!(rows.iter().map(|r| r.seed).collect::<Vec<_>>(), [0, 1]);
+    // Ten seeds: L, T, chimney breasts and walls at an angle off
+    // corridors, furniture and people; each job is run (stopped after 10
+    // simulated minutes: the study's plumbing and the runtime on ten
+    // buildings are under test here, its figures are the study's), and
+    // one not done says why, with its true scores.
+    let rows = stucco_cli::run_buildings(0..10, dir.path(), Some(600.0)).unwrap();
+    assert_eq!(
+        rows.iter().map(|r| r.seed).collect::<Vec<_>>(),
+        (0..10).collect::<Vec<_>>()
+    );
     for r in &rows {
         assert!(
             ["done", "failed", "stopped"].contains(&r.outcome.as_str()),
@@ -62,9 +66,9 @@ fn the_buildings_study_runs_each_job_or_says_why_it_could_not() {
     }
     let done = rows.iter().filter(|r| r.outcome == "done").count();
     let table = stucco_cli::buildings_table(&rows);
-    assert_eq!(table.lines().count(), 4, "{table}");
+    assert_eq!(table.lines().count(), 12, "{table}");
     assert!(
-        table.ends_with(&format!("{done} of 2 jobs done\n")),
+        table.ends_with(&format!("{done} of 10 jobs done\n")),
         "{table}"
     );
 }
