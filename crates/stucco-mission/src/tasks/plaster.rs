@@ -552,10 +552,7 @@ impl Task for Plaster {
                 .is_some_and(|r| matches!(r.phase, Phase::Surveying))
             && let Some(mut legs) = survey_legs(&config.vehicle, est, self.spec.survey_speed_mps)
         {
-            legs.under_way = match self.ways.kind() {
-                Some(BehaviourKind::Path { segment, .. }) => Some(*segment),
-                _ => None,
-            };
+            legs.take_over(self.ways.kind());
             self.legs = Some(legs);
             self.ways.replace(Vec::new());
             return true;

@@ -263,10 +263,7 @@ impl Task for MapRoom {
             )
         {
             let mut legs = Legs::new(corners, None, self.speed_mps);
-            legs.under_way = match self.ways.kind() {
-                Some(BehaviourKind::Path { segment, .. }) => Some(*segment),
-                _ => None,
-            };
+            legs.take_over(self.ways.kind());
             self.legs = Some(legs);
             self.ways.replace(Vec::new());
             return true;
@@ -333,6 +330,17 @@ impl Legs {
             stuck_on: None,
             speed_mps,
         }
+    }
+
+    /// Takes over from the loop driven on the move whose behaviour under
+    /// way is `kind`: the next leg goes to the end of the side it was on
+    /// (the legs' sides are the loop's, in the same order); from its
+    /// start, before the loop began.
+    pub(crate) fn take_over(&mut self, kind: Option<&BehaviourKind>) {
+        self.under_way = match kind {
+            Some(BehaviourKind::Path { segment, .. }) => Some(*segment),
+            _ => None,
+        };
     }
 
     /// True when no clear way reached any corner the last time round.
