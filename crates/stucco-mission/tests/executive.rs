@@ -2699,6 +2699,29 @@ fn furniture_on_three_corners() -> Vec<stucco_plan::Obstacle> {
     vec![corner(0.5, 0.5), corner(4.5, 0.5), corner(4.5, 2.5)]
 }
 
+/// A `map_room` on a loop near the walls through those three corners,
+/// driven corner to corner.
+fn three_corner_map_room() -> Executive {
+    executive(
+        vec![map_room(Some(vec![[0.5, 0.5], [4.5, 0.5], [4.5, 2.5]]))],
+        true,
+    )
+}
+
+/// Runs until the timeout of [`map_room`] is past and asserts the task
+/// failed saying no way reaches the corners, the robot still at `at`.
+fn fails_with_no_way_to_corners(exec: &mut Executive, robot: &mut Robot, at: Point2<f64>) {
+    let events = run(exec, robot, 130.0, |_, _| Vec::new());
+    let MissionMode::Failed { reason } = exec.mode() else {
+        panic!("{:?} {:?}", exec.mode(), kinds(&events));
+    };
+    assert!(
+        reason.contains("no clear way reaches any corner"),
+        "{reason}"
+    );
+    assert!((robot.pose.position() - at).norm() < 1e-6);
+}
+
 #[test]
 fn a_map_room_loop_no_clear_way_reaches_fails_saying_so_without_moving_into_anything() {
     // Every corner of the loop taken by furniture: the robot waits where
@@ -2707,20 +2730,9 @@ fn a_map_room_loop_no_clear_way_reaches_fails_saying_so_without_moving_into_anyt
     let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
     robot.room_sigma = [0.05; 2];
     robot.floor = furniture_on_three_corners();
-    let mut exec = executive(
-        vec![map_room(Some(vec![[0.5, 0.5], [4.5, 0.5], [4.5, 2.5]]))],
-        true,
-    );
-    let events = run(&mut exec, &mut robot, 130.0, |_, _| Vec::new());
-    let MissionMode::Failed { reason } = exec.mode() else {
-        panic!("{:?} {:?}", exec.mode(), kinds(&events));
-    };
-    assert!(
-        reason.contains("no clear way reaches any corner"),
-        "{reason}"
-    );
+    let mut exec = three_corner_map_room();
+    fails_with_no_way_to_corners(&mut exec, &mut robot, Point2::new(2.5, 1.5));
     assert!(robot.now.as_secs_f64() > 120.0, "{:?}", robot.now);
-    assert!((robot.pose.position() - Point2::new(2.5, 1.5)).norm() < 1e-6);
 }
 
 #[test]
@@ -2730,10 +2742,7 @@ fn a_map_room_loop_blocked_goes_on_once_the_floor_is_clear() {
     let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
     robot.room_sigma = [0.05; 2];
     robot.floor = furniture_on_three_corners();
-    let mut exec = executive(
-        vec![map_room(Some(vec![[0.5, 0.5], [4.5, 0.5], [4.5, 2.5]]))],
-        true,
-    );
+    let mut exec = three_corner_map_room();
     run(&mut exec, &mut robot, 30.0, |_, _| Vec::new());
     assert!(!exec.mode().is_final(), "{:?}", exec.mode());
     assert!((robot.pose.position() - Point2::new(2.5, 1.5)).norm() < 1e-6);
@@ -2756,19 +2765,8 @@ fn a_map_room_robot_at_a_corner_no_way_leaves_is_stuck_there() {
     let mut robot = Robot::at(Pose2::new(0.5, 0.5, 0.0));
     robot.room_sigma = [0.05; 2];
     robot.floor = furniture_on_three_corners().split_off(1);
-    let mut exec = executive(
-        vec![map_room(Some(vec![[0.5, 0.5], [4.5, 0.5], [4.5, 2.5]]))],
-        true,
-    );
-    let events = run(&mut exec, &mut robot, 130.0, |_, _| Vec::new());
-    let MissionMode::Failed { reason } = exec.mode() else {
-        panic!("{:?} {:?}", exec.mode(), kinds(&events));
-    };
-    assert!(
-        reason.contains("no clear way reaches any corner"),
-        "{reason}"
-    );
-    assert!((robot.pose.position() - Point2::new(0.5, 0.5)).norm() < 1e-6);
+    let mut exec = three_corner_map_room();
+    fails_with_no_way_to_corners(&mut exec, &mut robot, Point2::new(0.5, 0.5));
 }
 
 #[test]

@@ -244,31 +244,22 @@ impl FloorMap {
             if u.x >= 0.0 { 1 } else { -1 },
             if u.y >= 0.0 { 1 } else { -1 },
         );
-        let edge = |c: i64, s: i64, o: f64| (c + i64::from(s > 0)) as f64 * FLOOR_CELL_M - o;
-        let mut t_max = (
-            if u.x.abs() > 1e-12 {
-                edge(c.0, step.0, from.x) / u.x
+        // Along each axis: how far along the beam to the first cell edge
+        // it crosses, and between edges (none crossed along an axis the
+        // beam runs square to).
+        let axis = |u: f64, c: i64, s: i64, o: f64| {
+            if u.abs() > 1e-12 {
+                let edge = (c + i64::from(s > 0)) as f64 * FLOOR_CELL_M - o;
+                (edge / u, FLOOR_CELL_M / u.abs())
             } else {
-                f64::INFINITY
-            },
-            if u.y.abs() > 1e-12 {
-                edge(c.1, step.1, from.y) / u.y
-            } else {
-                f64::INFINITY
-            },
+                (f64::INFINITY, f64::INFINITY)
+            }
+        };
+        let ((tx, dx), (ty, dy)) = (
+            axis(u.x, c.0, step.0, from.x),
+            axis(u.y, c.1, step.1, from.y),
         );
-        let t_delta = (
-            if u.x.abs() > 1e-12 {
-                FLOOR_CELL_M / u.x.abs()
-            } else {
-                f64::INFINITY
-            },
-            if u.y.abs() > 1e-12 {
-                FLOOR_CELL_M / u.y.abs()
-            } else {
-                f64::INFINITY
-            },
-        );
+        let (mut t_max, t_delta) = ((tx, ty), (dx, dy));
         loop {
             if c == end {
                 break;
@@ -1509,25 +1500,36 @@ mod tests {
     /// A person pacing to and fro across the room in front of a robot
     /// standing still for a minute is not mapped where they walk: their
     /// echoes are where the scans just before saw through.
-    #[test]
-    fn a_person_pacing_in_front_of_the_robot_is_not_mapped_where_they_walk() {
-        let pacing = stucco_sim::PersonSpec {
+    /// Someone pacing across the apartment's living room in front of the
+    /// robot's start, 3 s a way.
+    fn pacing() -> stucco_sim::PersonSpec {
+        stucco_sim::PersonSpec {
             path: vec![[3.2, 0.5], [3.2, 2.3]],
             speed_mps: 0.6,
-        };
+        }
+    }
+
+    /// Asserts that the robot standing `seconds` at the apartment's start
+    /// with [`pacing`] about maps no more within `[min, max]` than it does
+    /// alone.
+    fn pacing_not_mapped_within(seconds: f64, min: [f64; 2], max: [f64; 2]) {
         let (with, without) = (
-            floor_seen_with(vec![pacing], 60.0),
-            floor_seen_with(Vec::new(), 60.0),
+            floor_seen_with(vec![pacing()], seconds),
+            floor_seen_with(Vec::new(), seconds),
         );
-        // The middle of their walk, half a metre from either end.
-        let on_the_path = |o: &Obstacle| {
-            o.min_m[0] < 3.35 && o.max_m[0] > 3.05 && o.min_m[1] < 1.8 && o.max_m[1] > 1.0
+        let within = |o: &&Obstacle| {
+            o.min_m[0] < max[0] && o.max_m[0] > min[0] && o.min_m[1] < max[1] && o.max_m[1] > min[1]
         };
         assert!(
-            with.iter().filter(|o| on_the_path(o)).count()
-                <= without.iter().filter(|o| on_the_path(o)).count(),
+            with.iter().filter(within).count() <= without.iter().filter(within).count(),
             "mapped the person: {with:?} (without them: {without:?})"
         );
+    }
+
+    #[test]
+    fn a_person_pacing_in_front_of_the_robot_is_not_mapped_where_they_walk() {
+        // The middle of their walk, half a metre from either end.
+        pacing_not_mapped_within(60.0, [3.05, 1.0], [3.35, 1.8]);
     }
 
     /// Where a person pacing turns back (half a second on one spot, their
@@ -1537,23 +1539,9 @@ mod tests {
     /// of it to the other that is not mapped without them.
     #[test]
     fn where_a_person_turned_back_is_cleared_once_they_walk_on() {
-        let pacing = stucco_sim::PersonSpec {
-            path: vec![[3.2, 0.5], [3.2, 2.3]],
-            speed_mps: 0.6,
-        };
-        // 20 legs of 3 s and half the next: in the middle, walking.
-        let (with, without) = (
-            floor_seen_with(vec![pacing], 61.5),
-            floor_seen_with(Vec::new(), 61.5),
-        );
-        let on_the_path = |o: &Obstacle| {
-            o.min_m[0] < 3.4 && o.max_m[0] > 3.0 && o.min_m[1] < 2.5 && o.max_m[1] > 0.3
-        };
-        assert!(
-            with.iter().filter(|o| on_the_path(o)).count()
-                <= without.iter().filter(|o| on_the_path(o)).count(),
-            "kept where the person turned back: {with:?} (without them: {without:?})"
-        );
+        // 20 legs of 3 s and half the next: in the middle, walking; their
+        // whole walk, both turning points, clear.
+        pacing_not_mapped_within(61.5, [3.0, 0.3], [3.4, 2.5]);
     }
 
     /// A robot on `sim` with `perception` whose executive idles.
