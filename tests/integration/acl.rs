@@ -9,6 +9,9 @@ use std::time::Duration;
 use stucco_cli::{LinkConfig, Operator};
 use stucco_core::{Command, Reply};
 
+/// Longest wait for a robot's state to reach an operator.
+const STATE_WAIT: Duration = Duration::from_secs(10);
+
 /// An example configuration shipped in `crates/stucco-link/config/`, with
 /// each `(from, to)` replaced (every `from` must be there: the test runs
 /// the file as users get it).
@@ -72,7 +75,7 @@ impl Site<'_> {
         let mut ann = self.join(operator, "ann").unwrap();
         let mut vic = self.join(viewer, "vic").unwrap();
         // The viewer watches the robot...
-        assert!(vic.state(name, Duration::from_secs(3)).is_ok());
+        assert!(vic.state(name, STATE_WAIT).is_ok());
         // ...but none of its commands reaches it: no reply, nothing done.
         for command in [
             Command::Status,
@@ -87,7 +90,11 @@ impl Site<'_> {
             let err = vic.send(name, command, 2.0, None);
             assert!(err.is_err(), "a viewer's command got through: {err:?}");
         }
-        let state = ann.state(name, Duration::from_secs(3)).unwrap();
+        // Waited for as long as a loaded machine may take to publish it
+        // (it comes as soon as it is there; 3 s failed once in four full
+        // runs on 2 cores): a liveness wait, not the link's latency, which
+        // the link bench measures.
+        let state = ann.state(name, STATE_WAIT).unwrap();
         assert_eq!(
             state.task.as_ref().map(|t| t.1.as_str()),
             Some("wait_for_operator"),
