@@ -89,32 +89,10 @@ fn go_to_room_takes_the_robot_through_the_apartments_narrow_hall() {
 /// doors: the glazing is never taken for one.
 #[test]
 fn glazing_near_the_floor_is_not_taken_for_a_door_where_the_drawing_has_none() {
-    let dir = tempfile::tempdir().unwrap();
-    let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
-    write(
-        "world.toml",
-        r#"name = "glazed office"
-seed = 3
-
-[robot]
-at = [1.2, 1.0]
-heading_deg = 0.0
-
-[[room]]
-name = "office"
-corners = [[0.0, 0.0], [5.0, 0.0], [5.0, 4.0], [0.0, 4.0]]
-
-[[room]]
-name = "hall"
-corners = [[5.15, 0.0], [7.0, 0.0], [7.0, 4.0], [5.15, 4.0]]
-shared_walls = [3]
-
-[[door]]
-room = "office"
-wall = 1
-offset_m = 1.5
-width_m = 0.9
-
+    let s = office_and_hall(
+        "glazed office",
+        3,
+        r#"
 # Glazing from 15 cm up in the north wall, the laser's plane (30 cm)
 # crossing it.
 [[window]]
@@ -126,17 +104,51 @@ sill_m = 0.15
 head_m = 2.2
 glazed = true
 "#,
+        "map_room",
     );
-    write(
-        "mission.toml",
-        r#"name = "map a glazed office"
-world = "world.toml"
-seed = 3
-people = false
+    let r = &s.runs[0];
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    // The drawing's door, and no other.
+    assert_eq!(r.doors.len(), 1, "{:?}", r.doors);
+    assert_eq!(r.doors[0].wall, stucco_core::WallName::EAST);
+    assert!(r.doors[0].error_m < 0.05, "{:?}", r.doors);
+}
 
-[start]
-room = "office"
+/// A chair just inside the room beyond a door, where the passage's end
+/// would put the robot's front: the robot, held with its body through
+/// the door, is in that room, and the passage ends there (it failed,
+/// the way blocked, in four of the first eighteen generated buildings).
+#[test]
+fn a_chair_inside_the_next_room_ends_the_passage_once_the_body_is_through() {
+    let s = office_and_hall(
+        "a chair past the door",
+        5,
+        r#"
+# Its near legs 0.3 m short of where the passage's end puts the front:
+# the field meets them with the body 0.25 m through the door.
+[[chair]]
+at = [6.65, 1.95]
+size_m = [0.45, 0.45]
+heading_deg = 0.0
+height_m = 0.45
+leg_radius_m = 0.015
+"#,
+        "go_to_room\"\nroom = \"hall",
+    );
+    let r = &s.runs[0];
+    assert_eq!(r.outcome, "done", "{:?}", r.reason);
+    assert_eq!(r.room.as_deref(), Some("hall"));
+    assert_eq!(r.room_true.as_deref(), Some("hall"));
+}
 
+/// A job in an office 5 × 4 m with a hall 1.85 m wide east of it through a
+/// 0.9 m door, both drawn, the robot starting in the office: the world's
+/// `extra` tables (furniture, windows) and the one task `task` (its name,
+/// and any keys after it), run once with `seed`.
+fn office_and_hall(name: &str, seed: u64, extra: &str, task: &str) -> stucco_cli::MissionSummary {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |file: &str, text: &str| std::fs::write(dir.path().join(file), text).unwrap();
+    let rooms = r#"
 [[room]]
 name = "office"
 corners = [[0.0, 0.0], [5.0, 0.0], [5.0, 4.0], [0.0, 4.0]]
@@ -144,21 +156,46 @@ corners = [[0.0, 0.0], [5.0, 0.0], [5.0, 4.0], [0.0, 4.0]]
 [[room]]
 name = "hall"
 corners = [[5.15, 0.0], [7.0, 0.0], [7.0, 4.0], [5.15, 4.0]]
+"#;
+    write(
+        "world.toml",
+        &format!(
+            r#"name = "{name}"
+seed = {seed}
 
+[robot]
+at = [1.2, 1.0]
+heading_deg = 0.0
+{rooms}shared_walls = [3]
+
+[[door]]
+room = "office"
+wall = 1
+offset_m = 1.5
+width_m = 0.9
+{extra}"#
+        ),
+    );
+    write(
+        "mission.toml",
+        &format!(
+            r#"name = "{name}"
+world = "world.toml"
+seed = {seed}
+people = false
+
+[start]
+room = "office"
+{rooms}
 [[door]]
 rooms = ["office", "hall"]
 at_m = [5.075, 1.95]
 width_m = 0.9
 
 [[task]]
-task = "map_room"
-"#,
+task = "{task}"
+"#
+        ),
     );
-    let s = run_job(&dir.path().join("mission.toml"), None);
-    let r = &s.runs[0];
-    assert_eq!(r.outcome, "done", "{:?}", r.reason);
-    // The drawing's door, and no other.
-    assert_eq!(r.doors.len(), 1, "{:?}", r.doors);
-    assert_eq!(r.doors[0].wall, stucco_core::WallName::EAST);
-    assert!(r.doors[0].error_m < 0.05, "{:?}", r.doors);
+    run_job(&dir.path().join("mission.toml"), None)
 }

@@ -465,6 +465,18 @@ impl FloorPlan {
         None
     }
 
+    /// How deep `door`'s hole through its wall is: from the line of its
+    /// wall in one room to that in the other, m (the wall's thickness).
+    pub fn door_depth(&self, door: usize) -> Option<f64> {
+        let [s, t] = self.sides.get(door)?;
+        let (a, b) = (&self.rooms[s.room], &self.rooms[t.room]);
+        let near = a.wall(s.wall)?;
+        // The far side's middle, in the near room's frame.
+        let far = b.wall(t.wall)?.point(t.along_m, 0.0) + Vector2::from(b.origin_m)
+            - Vector2::from(a.origin_m);
+        Some(near.distance(&far).abs())
+    }
+
     /// The pose in the frame of the room beyond `door` of a robot at
     /// `pose` in the frame of `room`. `here` is where the filter puts the
     /// door's middle in this room's frame; `there`, where it puts it in
@@ -562,6 +574,11 @@ mod tests {
         assert_eq!(p.side(2, 1).unwrap().wall, WallName::EAST);
         assert_eq!(p.side(2, 2).unwrap().wall, WallName::WEST);
         assert_eq!(p.side(2, 0), None);
+        // Each door's hole is as deep as the wall between its rooms.
+        for door in 0..3 {
+            let depth = p.door_depth(door).unwrap();
+            assert!((depth - 0.2).abs() < 1e-9, "door {door}: {depth}");
+        }
     }
 
     #[test]

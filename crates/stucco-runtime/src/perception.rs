@@ -399,9 +399,16 @@ pub type RoomWindows<'a> = (Option<&'a str>, Vec<(WallName, Window)>);
 const CEILING_SAMPLES: usize = 400;
 /// Cells of the floor map, m.
 const FLOOR_CELL_M: f64 = 0.05;
-/// Largest σ of the position (and of the best-known side of the room)
-/// for a scan to go into the floor map, m.
-const FLOOR_MAX_SIGMA_M: f64 = 0.02;
+/// Largest σ of the position for a scan to go into the floor map, m
+/// (the default limit past which the estimate counts as lost).
+const FLOOR_MAX_SIGMA_M: f64 = 0.05;
+/// An echo this near a wall of the room is taken for the wall's, m (the
+/// laser's scatter), and this many σ of the position and of the room's
+/// size nearer still: echoes are placed within that of where they are,
+/// and a room not yet measured (just entered, its size the drawing's)
+/// has its far walls within that of where the filter puts them.
+const FLOOR_OFF_WALL_M: f64 = 0.12;
+const FLOOR_SIGMAS: f64 = 3.0;
 
 /// How many σ of the laser's range noise a wall's echoes are taken to
 /// scatter (one beam in 30,000 farther; the echo memory forgets one that
@@ -554,7 +561,9 @@ impl Perception {
             }
         };
         let mut out = Vec::new();
-        let [xs, ys] = self.room.ekf.now().0.fixed_rows::<2>(3).into();
+        // The room's box (a room of any shape: its corners' box; the
+        // filter's state past the pose is its size only for a rectangle).
+        let [xs, ys] = RoomView::geometry_of(&self.room.ekf).1;
         for &(lo, hi) in groups {
             let f = FLOOR_CELL_M;
             let (min, max) = (
@@ -605,14 +614,17 @@ impl Perception {
         twist: &stucco_core::Twist2,
         stamp: Stamp,
     ) {
-        // Only while the robot knows where it is in a room it has
-        // measured: echoes placed from a loose estimate would smear walls
-        // into the room.
-        if est.position_sigma_m > FLOOR_MAX_SIGMA_M
-            || est.room_sigma_m.iter().fold(f64::MAX, |a, &b| a.min(b)) > FLOOR_MAX_SIGMA_M
-        {
+        // Only while the robot knows where it is: echoes placed from a
+        // lost estimate would smear walls into the room. The band taken
+        // for the walls widens by the estimate's σ: in a room just
+        // entered, its size the drawing's, what stands in the middle is
+        // mapped at once, before the loop that measures the room drives
+        // into it.
+        if est.position_sigma_m > FLOOR_MAX_SIGMA_M {
             return;
         }
+        let room_sigma = est.room_sigma_m.iter().fold(0.0f64, |a, &b| a.max(b));
+        let off = FLOOR_OFF_WALL_M + FLOOR_SIGMAS * (est.position_sigma_m + room_sigma);
         // The echoes are placed from the pose the scan was taken at (its
         // first beam), the estimate's pose moved back by the motion since.
         let back = est.stamp.seconds_since(stamp).max(0.0);
@@ -627,7 +639,6 @@ impl Perception {
             // Every beam clears what it passed; an echo off the walls
             // is something standing.
             self.room.floor.pass(&from, &p);
-            let off = 0.12;
             let off_walls = match &outline {
                 Some(o) => o.clearance_m(&p) >= off,
                 None => p.x >= off && p.y >= off && p.x <= xs - off && p.y <= ys - off,
@@ -1530,6 +1541,47 @@ mod tests {
     fn a_person_pacing_in_front_of_the_robot_is_not_mapped_where_they_walk() {
         // The middle of their walk, half a metre from either end.
         pacing_not_mapped_within(60.0, [3.05, 1.0], [3.35, 1.8]);
+    }
+
+    /// A room kept in its drawing's polygon maps what stands on its floor
+    /// as one kept as a rectangle does. The pieces were stretched to the
+    /// walls by the filter's state past the pose taken for the room's
+    /// size, which it is only for a rectangle; a polygon's holds its
+    /// walls' lines in the drawing's order (here from the north-east
+    /// corner: the north and west walls'). Each piece came out with its
+    /// far side before its near one, and the ways were planned through
+    /// it (every L, T, angled and notched room of the generated
+    /// buildings).
+    #[test]
+    #[allow(clippy::expect_used)]
+    fn a_room_kept_as_a_polygon_maps_its_floor_as_a_rectangle_does() {
+        let seen = |polygon: bool| {
+            let (mut robot, _) = at_the_apartments_start();
+            if polygon {
+                let corners = [[5.0, 2.85], [0.0, 2.85], [0.0, 0.0], [5.0, 0.0]];
+                robot
+                    .perception_mut()
+                    .keep_room_drawn(&corners, 0.01)
+                    .expect("a room");
+            }
+            for _ in 0..(10.0 / DT_S) as usize {
+                drive(&mut robot, 0.0, 0.0);
+            }
+            robot.perception().floor_obstacles()
+        };
+        let (rectangle, polygon) = (seen(false), seen(true));
+        assert!(!rectangle.is_empty());
+        for o in &polygon {
+            assert!(
+                o.min_m[0] <= o.max_m[0] && o.min_m[1] <= o.max_m[1],
+                "{polygon:?}"
+            );
+        }
+        assert_eq!(
+            polygon.len(),
+            rectangle.len(),
+            "{polygon:?} / {rectangle:?}"
+        );
     }
 
     /// Where a person pacing turns back (half a second on one spot, their

@@ -7,6 +7,7 @@ use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, 
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::{EventKind, ExecutiveConfig};
 use crate::model::{DoorEstimate, Estimate, WallGeometry, depth_from, depth_of_room};
+use nalgebra::Point2;
 use std::collections::VecDeque;
 use stucco_core::{DriveCommand, Pose2, wrap_angle};
 
@@ -22,6 +23,9 @@ const BACKED_LASER_BEYOND_M: f64 = 0.5;
 /// beyond it, m (the apartment's missions set the protective field's
 /// margin to 3 cm; a mission with a longer field may be stopped there).
 const DOOR_FIT_M: f64 = 0.1;
+/// A body whose trailing end is this far past the far face of a door's
+/// wall is through the door, m.
+const THROUGH_M: f64 = 0.05;
 
 /// Where a door task goes.
 #[derive(Clone, Debug)]
@@ -118,6 +122,40 @@ impl DoorTask {
     }
 }
 
+impl DoorTask {
+    /// True on the run through a door of the plan with the body's
+    /// trailing end past the wall's far face by [`THROUGH_M`].
+    fn through_the_wall(&self, cx: &TaskCx<'_>) -> bool {
+        let (config, est) = (cx.config, cx.est);
+        let Some(door) = self
+            .doorway
+            .as_ref()
+            .filter(|w| w.entering.is_none())
+            .and_then(|w| w.through)
+        else {
+            return false;
+        };
+        let v = &config.vehicle;
+        let trailing_m = match self.ways.kind() {
+            _ if !self.ways.queue.is_empty() => return false,
+            Some(BehaviourKind::Regulate { .. }) => -v.rear_overhang_m,
+            Some(BehaviourKind::Reverse { .. }) => v.front_m(),
+            _ => return false,
+        };
+        let depth = config.floor.as_ref().and_then(|f| f.door_depth(door));
+        let wall = est
+            .doors
+            .iter()
+            .find(|d| d.plan_door == Some(door))
+            .and_then(|d| WallGeometry::in_room(est, d.wall));
+        let (Some(depth), Some(wall)) = (depth, wall) else {
+            return false;
+        };
+        let tail = est.pose.transform_point(&Point2::new(trailing_m, 0.0));
+        -wall.distance(&tail.coords) >= depth + THROUGH_M
+    }
+}
+
 impl Task for DoorTask {
     fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
         let (config, est) = (cx.config, cx.est);
@@ -202,6 +240,14 @@ impl Task for DoorTask {
     }
 
     fn blocked(&mut self, cx: &mut TaskCx<'_>, blocked_s: f64) -> bool {
+        // Held on the run through a door with the body through it
+        // (furniture or a person just inside the room beyond, which the
+        // passage's fixed end did not know): the passage ends where the
+        // robot stands, in the room beyond.
+        if blocked_s > REPLAN_AFTER_S && self.through_the_wall(cx) {
+            self.ways.replace(VecDeque::new());
+            return true;
+        }
         // On the way to a door, something the room's map did not hold
         // when the way was planned (furniture first seen from the
         // doorway): the way is planned again on what the map holds now.

@@ -50,27 +50,34 @@ pub(crate) fn planned_way(
             manoeuvre::behaviours(&config.gains, &moves, speed_mps),
         ));
     }
-    if space.pose_clear(from) {
-        return None;
+    if !space.pose_clear(from) {
+        // Standing nearer something than the body's margins allow (seen
+        // only on the way here, or a station's end squeezed against a
+        // wall): run out along the robot's own line, backing first (the
+        // way it came), then forward, as little as frees it, and go on
+        // from there.
+        let out = RUN_OUT_M.iter().flat_map(|&d| [-d, d]).find_map(|d| {
+            let out = *from * Pose2::new(d, 0.0, 0.0);
+            if !space.pose_clear(&out) {
+                return None;
+            }
+            let (cost, moves) = space.manoeuvre(&out, goal)?;
+            let mut way = vec![if d < 0.0 {
+                Behaviour::reverse_to(&config.gains, out, speed_mps)
+            } else {
+                Behaviour::regulate(&config.gains, out, speed_mps)
+            }];
+            way.extend(manoeuvre::behaviours(&config.gains, &moves, speed_mps));
+            Some((cost + 0.5 + d.abs() / speed_mps, way))
+        });
+        return out;
     }
-    // Standing nearer something than the body's margins allow (it was
-    // seen only on the way here): back out along the way the robot came,
-    // as little as frees it, and go on from there.
-    BACK_OUT_M.iter().find_map(|&d| {
-        let back = *from * Pose2::new(-d, 0.0, 0.0);
-        if !space.pose_clear(&back) {
-            return None;
-        }
-        let (cost, moves) = space.manoeuvre(&back, goal)?;
-        let mut way = vec![Behaviour::reverse_to(&config.gains, back, speed_mps)];
-        way.extend(manoeuvre::behaviours(&config.gains, &moves, speed_mps));
-        Some((cost + 0.5 + d / speed_mps, way))
-    })
+    None
 }
 
-/// How far a robot standing too near something may back out before its
-/// way is planned, m (tried in turn).
-const BACK_OUT_M: [f64; 4] = [0.1, 0.2, 0.3, 0.4];
+/// How far a robot standing too near something may run out along its
+/// line, backing or forward, before its way is planned, m (tried in turn).
+const RUN_OUT_M: [f64; 4] = [0.1, 0.2, 0.3, 0.4];
 
 /// [`planned_way`], or failing that the plain way, the supervisor
 /// stopping the robot before it touches anything.
