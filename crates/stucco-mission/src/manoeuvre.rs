@@ -6,7 +6,11 @@
 //! into a wall. A driver turns a car in a narrow street in several moves;
 //! the robot does the same with partial turns on the spot and short
 //! straight runs, forward or backing, between them. [`Space::manoeuvre`]
-//! finds such moves by an A* search over the pose.
+//! finds such moves by an A* search over the pose; its estimate of the
+//! way still to go is the crow's flight at first, and past a few thousand
+//! poses the shortest way over the floor for a disc as wide as the body
+//! (round furniture, through a door), which also tells a goal no way
+//! reaches.
 //!
 //! Every pose along every move keeps the body inside the room (or a
 //! doorway of it) and off what stands on the floor, with the supervisor's
@@ -48,6 +52,13 @@ const RUNS_M: [f64; 7] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2];
 const BUDGET: usize = 100_000;
 /// How much the search's estimate of the time still to go is inflated.
 const GREED: f64 = 1.5;
+/// Poses the search expands on its estimate as the crow flies before it
+/// works out the way over the floor (most ways are found before).
+const CROW_EXPANSIONS: usize = 2_000;
+/// Cells of the floor the way over it is worked out on, m.
+const REACH_CELL_M: f64 = 0.1;
+/// Points on the rim of the body's middle disc checked free.
+const RIM_POINTS: usize = 24;
 /// A run's start this far off the line through its goal, m, or turned
 /// this much from it, rad, is taken onto the line by the line law with a
 /// swing of the body no straight run sweeps.
@@ -109,6 +120,28 @@ pub(crate) struct Space<'a> {
     turn_overhead_s: f64,
 }
 
+/// How far the middle of the body is from its place at the goal over the
+/// floor, cell by cell: the shortest way for a disc as wide as the body
+/// (what any pose of the body clears), 8-neighbours, infinite where no
+/// such way reaches.
+#[derive(Clone, Debug)]
+struct Reach {
+    first: Vector2<f64>,
+    cells: [usize; 2],
+    metres: Vec<f64>,
+}
+
+impl Reach {
+    fn at(&self, p: &Vector2<f64>) -> f64 {
+        let c = (p - self.first) / REACH_CELL_M;
+        let (i, j) = (c.x.floor(), c.y.floor());
+        if i < 0.0 || j < 0.0 || i >= self.cells[0] as f64 || j >= self.cells[1] as f64 {
+            return f64::INFINITY;
+        }
+        self.metres[j as usize * self.cells[0] + i as usize]
+    }
+}
+
 impl<'a> Space<'a> {
     /// The room `room_m` (or, when they are given, of the `corners`
     /// within that box) with its `doors` and `obstacles`, for `vehicle`
@@ -165,6 +198,103 @@ impl<'a> Space<'a> {
             None => (0.0..=xs).contains(&p.x) && (0.0..=ys).contains(&p.y),
         };
         in_room || self.doorways.iter().any(|d| d.contains(p))
+    }
+
+    /// The middle of the body (field and margins included) of a robot
+    /// at `pose`.
+    fn middle(&self, pose: &Pose2) -> Vector2<f64> {
+        let f = Vector2::new(pose.theta.cos(), pose.theta.sin());
+        pose.position().coords + f * (0.5 * (self.front_m - self.rear_m))
+    }
+
+    /// The way over the floor to the body's middle at `goal`: a cell is
+    /// free when the disc the body holds about its middle (its half-width,
+    /// less the cell's half-diagonal and a centimetre for the rim's
+    /// points) is in the room or a doorway and off every obstacle, so the
+    /// middle of every clear pose lies in a free cell and every clear way
+    /// keeps to free cells joined one to the next.
+    fn reach(&self, goal: &Pose2) -> Reach {
+        let [xs, ys] = self.room_m;
+        let pad = if self.doorways.is_empty() {
+            0.0
+        } else {
+            DOORWAY_DEPTH_M
+        };
+        let first = Vector2::new(-pad, -pad);
+        let cells = [xs, ys].map(|s| ((s + 2.0 * pad) / REACH_CELL_M).ceil().max(1.0) as usize);
+        let half = 0.5 * (self.front_m + self.rear_m);
+        let r = self.half_width_m.min(half) - std::f64::consts::FRAC_1_SQRT_2 * REACH_CELL_M - 0.01;
+        let free_cell = |k: usize| {
+            let c = first
+                + Vector2::new(
+                    ((k % cells[0]) as f64 + 0.5) * REACH_CELL_M,
+                    ((k / cells[0]) as f64 + 0.5) * REACH_CELL_M,
+                );
+            let rim = (0..RIM_POINTS).all(|n| {
+                let a = std::f64::consts::TAU * n as f64 / RIM_POINTS as f64;
+                self.free_point(&(c + Vector2::new(a.cos(), a.sin()) * r.max(0.0)))
+            });
+            rim && self.free_point(&c)
+                && self.obstacles.iter().all(|o| {
+                    let dx = (o.min_m[0] - c.x).max(c.x - o.max_m[0]).max(0.0);
+                    let dy = (o.min_m[1] - c.y).max(c.y - o.max_m[1]).max(0.0);
+                    dx.hypot(dy) >= r
+                })
+        };
+        let n = cells[0] * cells[1];
+        let free: Vec<bool> = (0..n).map(free_cell).collect();
+        let mut metres = vec![f64::INFINITY; n];
+        let start = (self.middle(goal) - first) / REACH_CELL_M;
+        let (i, j) = (start.x.floor(), start.y.floor());
+        if i < 0.0 || j < 0.0 || i >= cells[0] as f64 || j >= cells[1] as f64 {
+            return Reach {
+                first,
+                cells,
+                metres,
+            };
+        }
+        let k0 = j as usize * cells[0] + i as usize;
+        metres[k0] = 0.0;
+        let mut open = BTreeSet::new();
+        open.insert((0.0f64.to_bits(), k0));
+        while let Some((d, k)) = open.pop_first() {
+            let d = f64::from_bits(d);
+            if d > metres[k] {
+                continue;
+            }
+            let (i, j) = ((k % cells[0]) as i64, (k / cells[0]) as i64);
+            for (di, dj) in [
+                (1, 0),
+                (-1, 0),
+                (0, 1),
+                (0, -1),
+                (1, 1),
+                (1, -1),
+                (-1, 1),
+                (-1, -1),
+            ] {
+                let (a, b) = (i + di, j + dj);
+                if a < 0 || b < 0 || a >= cells[0] as i64 || b >= cells[1] as i64 {
+                    continue;
+                }
+                let m = b as usize * cells[0] + a as usize;
+                let step = if di != 0 && dj != 0 {
+                    std::f64::consts::SQRT_2
+                } else {
+                    1.0
+                };
+                let e = d + step * REACH_CELL_M;
+                if free[m] && e < metres[m] {
+                    metres[m] = e;
+                    open.insert((e.to_bits(), m));
+                }
+            }
+        }
+        Reach {
+            first,
+            cells,
+            metres,
+        }
     }
 
     /// True when the body (with its field's sides) at `p` heading `theta`
@@ -426,17 +556,22 @@ impl<'a> Space<'a> {
         // The time of the run and the turn still needed, inflated: the
         // search is greedier and its way at most that much dearer than
         // the best.
-        let heuristic = |p: &Pose2| {
+        // Past the first expansions, the way over the floor stands in for
+        // the crow's flight where it is longer (round furniture, through
+        // a door), and a goal it does not reach is given up at once. The
+        // body's middle moves at most as fast as a run drives it, and
+        // half as fast as a turn on the spot swings it.
+        let mut reach: Option<Reach> = None;
+        let heuristic = |p: &Pose2, reach: &Option<Reach>| {
             let turn = wrap_angle(goal.theta - p.theta).abs();
             let overhead = if turn > AT_GOAL_RAD {
                 self.turn_overhead_s
             } else {
                 0.0
             };
-            GREED
-                * ((goal.position() - p.position()).norm() / self.speed_mps
-                    + turn / self.turn_radps
-                    + overhead)
+            let crow = (goal.position() - p.position()).norm();
+            let floor = reach.as_ref().map_or(0.0, |r| r.at(&self.middle(p)));
+            GREED * (crow.max(floor) / self.speed_mps + turn / self.turn_radps + overhead)
         };
         let key = |p: &Pose2, turned: bool| {
             (
@@ -462,7 +597,7 @@ impl<'a> Space<'a> {
         }];
         let mut best: BTreeMap<(i64, i64, i64, bool), f64> = BTreeMap::new();
         let mut open = BTreeSet::new();
-        open.insert((heuristic(from).to_bits(), 0usize));
+        open.insert((heuristic(from, &reach).to_bits(), 0usize));
         let mut found: Option<(f64, usize, Vec<Move>)> = None;
         let mut expanded = 0;
         while let Some((f, k)) = open.pop_first() {
@@ -475,6 +610,22 @@ impl<'a> Space<'a> {
             expanded += 1;
             if expanded > BUDGET {
                 break;
+            }
+            if expanded == CROW_EXPANSIONS && found.is_none() {
+                let r = self.reach(goal);
+                if !r.at(&self.middle(from)).is_finite() {
+                    return None;
+                }
+                reach = Some(r);
+                open.insert((f, k));
+                open = std::mem::take(&mut open)
+                    .into_iter()
+                    .map(|(_, k)| {
+                        let n = &nodes[k];
+                        ((n.cost + heuristic(&n.pose, &reach)).to_bits(), k)
+                    })
+                    .collect();
+                continue;
             }
             let (pose, cost, turned) = (nodes[k].pose, nodes[k].cost, nodes[k].turned);
             // The last moves straight onto the goal, forward or backing.
@@ -525,7 +676,7 @@ impl<'a> Space<'a> {
                     parent: Some((k, m)),
                     turned: Some(is_turn),
                 });
-                open.insert(((c + heuristic(&to)).to_bits(), nodes.len() - 1));
+                open.insert(((c + heuristic(&to, &reach)).to_bits(), nodes.len() - 1));
             }
         }
         let (cost, mut k, shot) = found?;
@@ -771,5 +922,41 @@ mod tests {
         let goal = Pose2::new(3.4, 0.8, -std::f64::consts::FRAC_PI_2);
         let moves = space.manoeuvre(&from, &goal).expect("a way round").1;
         assert_way_clear(&space, &from, &moves, &goal);
+    }
+
+    /// The way over the floor for the body's middle: round a box, longer
+    /// than the crow's flight; through a wall of boxes from side to side,
+    /// none, and the search gives up on the goal beyond it.
+    #[test]
+    fn the_way_over_the_floor_goes_round_what_stands_and_none_crosses_a_barrier() {
+        let v = VehicleSpec::default();
+        let (from, goal) = (Pose2::new(1.0, 2.0, 0.0), Pose2::new(5.0, 2.0, 0.0));
+        let box_ = [Obstacle {
+            min_m: [2.8, 1.0],
+            max_m: [3.4, 3.0],
+            height_m: 1.0,
+        }];
+        let space = Space::new([8.0, 4.0], &[], &[], &box_, &v, &demo_safety(), 0.3);
+        let reach = space.reach(&goal);
+        let (at, crow) = (
+            reach.at(&space.middle(&from)),
+            (space.middle(&goal) - space.middle(&from)).norm(),
+        );
+        assert!(
+            at.is_finite() && at > crow + 0.5,
+            "{at} m, {crow} m as the crow flies"
+        );
+        let moves = space.manoeuvre(&from, &goal).expect("a way round").1;
+        assert_way_clear(&space, &from, &moves, &goal);
+        // The box from wall to wall: no way for the body's middle, and
+        // none for the body.
+        let barrier = [Obstacle {
+            min_m: [2.8, 0.0],
+            max_m: [3.4, 4.0],
+            height_m: 1.0,
+        }];
+        let space = Space::new([8.0, 4.0], &[], &[], &barrier, &v, &demo_safety(), 0.3);
+        assert!(!space.reach(&goal).at(&space.middle(&from)).is_finite());
+        assert_eq!(space.manoeuvre(&from, &goal), None);
     }
 }

@@ -10,7 +10,9 @@ use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::ExecutiveConfig;
 use crate::model::{Estimate, WallGeometry, walls_or_all};
 use crate::task::WallName;
+use nalgebra::Vector2;
 use stucco_core::{DriveCommand, Obstacle, Pose2, VehicleSpec};
+use stucco_plan::Outline;
 
 /// Seconds a `map_room` loop driven corner to corner stands before its
 /// first leg: the floor map needs a score of echoes in a cell (the scans
@@ -127,8 +129,14 @@ impl Task for MapRoom {
         let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
         let speed_mps = self.speed_mps;
         let end = pivot_clearance(config);
-        let corners = survey_loop(self.path.as_deref(), self.inset_m, est.room_m, end)?;
-        if turns_on_the_move(&corners, est.room_m, &config.vehicle) {
+        let corners = survey_loop(
+            self.path.as_deref(),
+            self.inset_m,
+            est.room_m,
+            &est.corners,
+            end,
+        )?;
+        if turns_on_the_move(&corners, est.room_m, &est.corners, &config.vehicle) {
             let loop_ = closed(&corners);
             let (a, b) = (loop_[0], loop_[1]);
             let towards = (b[1] - a[1]).atan2(b[0] - a[0]);
@@ -223,6 +231,7 @@ impl Task for MapRoom {
                 self.path.as_deref(),
                 self.inset_m,
                 est.room_m,
+                &est.corners,
                 pivot_clearance(config),
             ) {
                 Ok(l) => {
@@ -259,6 +268,7 @@ impl Task for MapRoom {
                 self.path.as_deref(),
                 self.inset_m,
                 cx.est.room_m,
+                &cx.est.corners,
                 pivot_clearance(cx.config),
             )
         {
@@ -651,10 +661,24 @@ fn survey_loop(
     path: Option<&[[f64; 2]]>,
     inset_m: f64,
     room_m: [f64; 2],
+    outline: &[[f64; 2]],
     end_m: f64,
 ) -> Result<Vec<[f64; 2]>, TaskFailure> {
     if let Some(p) = path {
         return Ok(p.to_vec());
+    }
+    // A room of another shape: its own outline moved in (an L's loop
+    // turns six corners, none in the notch its box would put one in), as
+    // far in as asked where the room leaves that, else as little nearer
+    // the walls as it does.
+    if !outline.is_empty()
+        && let Some(l) = [1.0, 0.75, 0.5]
+            .iter()
+            .map(|f| f * inset_m)
+            .filter(|&d| d >= LOOP_WALL_MIN_M)
+            .find_map(|d| inset_outline(outline, d))
+    {
+        return Ok(l);
     }
     let [xs, ys] = room_m;
     // The inset asked for where the room leaves a loop that far in;
@@ -687,6 +711,42 @@ fn survey_loop(
     ])
 }
 
+/// The corners of the room drawn by `corners` (counter-clockwise) with
+/// every wall moved `inset_m` in, each two walls one after the other met
+/// (walls in one line: the corner between them dropped). `None` where a
+/// corner so found stands nearer a wall than the inset (a part of the
+/// room narrower than twice it) or the loop turns over.
+fn inset_outline(corners: &[[f64; 2]], inset_m: f64) -> Option<Vec<[f64; 2]>> {
+    let n = corners.len();
+    let at = |k: usize| Vector2::from(corners[k % n]);
+    // Each wall's line moved in: a point on it and its direction.
+    let lines: Vec<(Vector2<f64>, Vector2<f64>)> = (0..n)
+        .filter_map(|k| {
+            let d = (at(k + 1) - at(k)).try_normalize(1e-9)?;
+            Some((at(k) + Vector2::new(-d.y, d.x) * inset_m, d))
+        })
+        .collect();
+    let m = lines.len();
+    let mut out: Vec<[f64; 2]> = Vec::with_capacity(m);
+    for k in 0..m {
+        let ((p0, d0), (p1, d1)) = (lines[(k + m - 1) % m], lines[k]);
+        let cross = d0.x * d1.y - d0.y * d1.x;
+        if cross.abs() < 1e-6 {
+            continue;
+        }
+        let t = ((p1 - p0).x * d1.y - (p1 - p0).y * d1.x) / cross;
+        let q = p0 + d0 * t;
+        out.push([q.x, q.y]);
+    }
+    let loop_ = Outline::new(&out);
+    let room = Outline::new(corners);
+    let clear = out
+        .iter()
+        .all(|c| room.clearance_m(&(*c).into()) >= inset_m - 1e-6);
+    (out.len() >= 3 && loop_.signed_area_m2() > 0.0 && loop_.fault().is_none() && clear)
+        .then_some(out)
+}
+
 /// Margin a loop's corners keep from the walls beyond the front's reach
 /// ahead of the rear axle, for the loop to be turned on the move, m.
 const ON_THE_MOVE_SPARE_M: f64 = 0.1;
@@ -696,8 +756,19 @@ const ON_THE_MOVE_SPARE_M: f64 = 0.1;
 /// by as much as its reach ahead of the rear axle, and every corner stands
 /// that far and `ON_THE_MOVE_SPARE_M` more from every wall. A loop in a
 /// furnished bedroom, between the bed and the wall, does not.
-fn turns_on_the_move(corners: &[[f64; 2]], room_m: [f64; 2], vehicle: &VehicleSpec) -> bool {
+fn turns_on_the_move(
+    corners: &[[f64; 2]],
+    room_m: [f64; 2],
+    outline: &[[f64; 2]],
+    vehicle: &VehicleSpec,
+) -> bool {
     let reach = vehicle.front_m() + ON_THE_MOVE_SPARE_M;
+    if !outline.is_empty() {
+        let room = Outline::new(outline);
+        return corners
+            .iter()
+            .all(|c| room.clearance_m(&(*c).into()) >= reach);
+    }
     corners
         .iter()
         .all(|&[x, y]| x.min(room_m[0] - x) >= reach && y.min(room_m[1] - y) >= reach)
@@ -722,29 +793,72 @@ fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
 mod tests {
     use super::*;
 
+    /// An L-shaped room's loop runs its own six corners 1 m in, none in
+    /// the notch (its box's loop put a corner there, outside the room: no
+    /// way reached it); a room too narrow for the loop asked runs one
+    /// nearer its walls.
+    #[test]
+    fn an_l_rooms_loop_follows_its_walls_not_its_box() {
+        let l = [
+            [0.0, 0.0],
+            [6.0, 0.0],
+            [6.0, 3.0],
+            [3.0, 3.0],
+            [3.0, 5.0],
+            [0.0, 5.0],
+        ];
+        let lp = survey_loop(None, 1.0, [6.0, 5.0], &l, 1.0).unwrap_or_default();
+        let want = [
+            [1.0, 1.0],
+            [5.0, 1.0],
+            [5.0, 2.0],
+            [2.0, 2.0],
+            [2.0, 4.0],
+            [1.0, 4.0],
+        ];
+        assert_eq!(lp.len(), want.len(), "{lp:?}");
+        for (a, b) in lp.iter().zip(want) {
+            assert!(
+                (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
+                "{lp:?}"
+            );
+        }
+        // Its arm 1.6 m wide: the loop 0.75 m in.
+        let narrow = [
+            [0.0, 0.0],
+            [6.0, 0.0],
+            [6.0, 1.6],
+            [1.6, 1.6],
+            [1.6, 5.0],
+            [0.0, 5.0],
+        ];
+        let lp = survey_loop(None, 1.0, [6.0, 5.0], &narrow, 1.0).unwrap_or_default();
+        assert_eq!(lp.first(), Some(&[0.75, 0.75]), "{lp:?}");
+    }
+
     #[test]
     fn the_default_loop_squeezes_into_a_hall_and_gives_up_where_the_body_cannot_pass() {
         // A room: the loop 1 m inside its walls.
-        let open = survey_loop(None, 1.0, [5.0, 4.0], 1.0).unwrap_or_default();
+        let open = survey_loop(None, 1.0, [5.0, 4.0], &[], 1.0).unwrap_or_default();
         assert_eq!(open, [[1.0, 1.0], [4.0, 1.0], [4.0, 3.0], [1.0, 3.0]]);
         // A 1.6 m hall: its middle line, each end 1 m off the end wall (a
         // leg across it would stand the body across the hall).
-        let hall = survey_loop(None, 1.0, [5.5, 1.6], 1.0).unwrap_or_default();
+        let hall = survey_loop(None, 1.0, [5.5, 1.6], &[], 1.0).unwrap_or_default();
         assert_eq!(hall, [[1.0, 0.8], [4.5, 0.8]]);
-        let upright = survey_loop(None, 1.0, [1.6, 5.5], 1.0).unwrap_or_default();
+        let upright = survey_loop(None, 1.0, [1.6, 5.5], &[], 1.0).unwrap_or_default();
         assert_eq!(upright, [[0.8, 1.0], [0.8, 4.5]]);
         // Narrower than the body and its field: no loop.
         assert!(matches!(
-            survey_loop(None, 1.0, [5.0, 1.0], 1.0),
+            survey_loop(None, 1.0, [5.0, 1.0], &[], 1.0),
             Err(TaskFailure::NoLoop { .. })
         ));
         // A small inset asked for in a room that leaves it is kept.
-        let near = survey_loop(None, 0.3, [5.0, 4.0], 1.0).unwrap_or_default();
+        let near = survey_loop(None, 0.3, [5.0, 4.0], &[], 1.0).unwrap_or_default();
         assert_eq!(near[0], [0.3, 0.3]);
         // A loop given is driven as given.
         let given = [[0.5, 0.5], [1.0, 0.5]];
         assert_eq!(
-            survey_loop(Some(&given), 1.0, [1.2, 1.2], 1.0).unwrap_or_default(),
+            survey_loop(Some(&given), 1.0, [1.2, 1.2], &[], 1.0).unwrap_or_default(),
             given
         );
     }
