@@ -132,13 +132,16 @@ struct Reach {
 }
 
 impl Reach {
-    fn at(&self, p: &Vector2<f64>) -> f64 {
+    /// The index of the cell `p` lies in, if the grid holds it.
+    fn cell(&self, p: &Vector2<f64>) -> Option<usize> {
         let c = (p - self.first) / REACH_CELL_M;
         let (i, j) = (c.x.floor(), c.y.floor());
-        if i < 0.0 || j < 0.0 || i >= self.cells[0] as f64 || j >= self.cells[1] as f64 {
-            return f64::INFINITY;
-        }
-        self.metres[j as usize * self.cells[0] + i as usize]
+        (i >= 0.0 && j >= 0.0 && i < self.cells[0] as f64 && j < self.cells[1] as f64)
+            .then(|| j as usize * self.cells[0] + i as usize)
+    }
+
+    fn at(&self, p: &Vector2<f64>) -> f64 {
+        self.cell(p).map_or(f64::INFINITY, |k| self.metres[k])
     }
 }
 
@@ -243,17 +246,15 @@ impl<'a> Space<'a> {
         };
         let n = cells[0] * cells[1];
         let free: Vec<bool> = (0..n).map(free_cell).collect();
-        let mut metres = vec![f64::INFINITY; n];
-        let start = (self.middle(goal) - first) / REACH_CELL_M;
-        let (i, j) = (start.x.floor(), start.y.floor());
-        if i < 0.0 || j < 0.0 || i >= cells[0] as f64 || j >= cells[1] as f64 {
-            return Reach {
-                first,
-                cells,
-                metres,
-            };
-        }
-        let k0 = j as usize * cells[0] + i as usize;
+        let mut reach = Reach {
+            first,
+            cells,
+            metres: vec![f64::INFINITY; n],
+        };
+        let Some(k0) = reach.cell(&self.middle(goal)) else {
+            return reach;
+        };
+        let metres = &mut reach.metres;
         metres[k0] = 0.0;
         let mut open = BTreeSet::new();
         open.insert((0.0f64.to_bits(), k0));
@@ -290,11 +291,7 @@ impl<'a> Space<'a> {
                 }
             }
         }
-        Reach {
-            first,
-            cells,
-            metres,
-        }
+        reach
     }
 
     /// True when the body (with its field's sides) at `p` heading `theta`

@@ -143,11 +143,7 @@ impl DoorTask {
             _ => return false,
         };
         let depth = config.floor.as_ref().and_then(|f| f.door_depth(door));
-        let wall = est
-            .doors
-            .iter()
-            .find(|d| d.plan_door == Some(door))
-            .and_then(|d| WallGeometry::in_room(est, d.wall));
+        let wall = seen_plan_door(est, door).and_then(|d| WallGeometry::in_room(est, d.wall));
         let (Some(depth), Some(wall)) = (depth, wall) else {
             return false;
         };
@@ -455,11 +451,7 @@ fn plan_door_pass(
     approach_beyond_m: [f64; 2],
     speed_mps: f64,
 ) -> Result<Vec<Behaviour>, TaskFailure> {
-    let d = est
-        .doors
-        .iter()
-        .find(|d| d.plan_door == Some(door))
-        .ok_or(TaskFailure::PlanDoorNotSeen { door })?;
+    let d = seen_plan_door(est, door).ok_or(TaskFailure::PlanDoorNotSeen { door })?;
     Ok(door_pass(
         config,
         est,
@@ -479,4 +471,10 @@ fn next_room_depth(config: &ExecutiveConfig, est: &Estimate, door: usize) -> Opt
     let room = floor.rooms().get(next)?;
     let g = room.wall(side.wall)?;
     Some(depth_of_room(&room.outline(), room.size_m, &g))
+}
+
+/// The door of the room `est` knows that is door `door` of the floor
+/// plan, once the robot has found it.
+fn seen_plan_door(est: &Estimate, door: usize) -> Option<&DoorEstimate> {
+    est.doors.iter().find(|d| d.plan_door == Some(door))
 }
