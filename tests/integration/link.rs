@@ -253,9 +253,10 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
     // In an order whose outcome is known: standing by, paused and resumed,
     // a door it does not know, a jog, the wait answered (the mission is
     // done, so skip is refused), a move reopens it, a wall to follow and an
-    // alignment refused (the operator typed a standoff of -1 m), a room map,
-    // plastering refused (this robot carries no spray tool), stop pauses
-    // what runs, abort ends it. (Tasks that start and then fail are the
+    // alignment refused (the operator typed a standoff of -1 m), a room map
+    // and stop pausing it (sent at once: the map looks only for what the
+    // robot has not seen, in seconds, no longer round a loop), plastering
+    // refused (this robot carries no spray tool), abort ends it. (Tasks that start and then fail are the
     // executive's tests': here a failed task would end the mission.)
     let vocabulary = [
         Command::Status,
@@ -288,6 +289,7 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
             side: Side::Left,
         },
         Command::MapRoom,
+        Command::Stop,
         Command::PlasterSurface {
             surface: SurfaceId::Ceiling,
             region: None,
@@ -295,7 +297,6 @@ fn over_a_faulty_link_every_command_runs_once_or_is_refused() {
         Command::GoToRoom {
             room: "hall".to_owned(),
         },
-        Command::Stop,
         Command::Abort,
     ];
     let mut refusals = Vec::new();

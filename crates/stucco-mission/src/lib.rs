@@ -46,6 +46,7 @@ mod route;
 mod supervisor;
 mod task;
 mod tasks;
+mod views;
 
 pub use behaviour::{Behaviour, BehaviourKind, PivotPhase, Step, go_to};
 pub use checkpoint::{

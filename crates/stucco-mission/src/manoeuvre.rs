@@ -125,7 +125,7 @@ pub(crate) struct Space<'a> {
 /// (what any pose of the body clears), 8-neighbours, infinite where no
 /// such way reaches.
 #[derive(Clone, Debug)]
-struct Reach {
+pub(crate) struct Reach {
     first: Vector2<f64>,
     cells: [usize; 2],
     metres: Vec<f64>,
@@ -142,6 +142,22 @@ impl Reach {
 
     fn at(&self, p: &Vector2<f64>) -> f64 {
         self.cell(p).map_or(f64::INFINITY, |k| self.metres[k])
+    }
+
+    /// The middle of every `every`-th cell across and along that the way
+    /// reaches, with how far it is over the floor, m.
+    pub(crate) fn reached(&self, every: usize) -> impl Iterator<Item = (Vector2<f64>, f64)> + '_ {
+        let every = every.max(1);
+        let [ni, nj] = self.cells;
+        (0..nj).step_by(every).flat_map(move |j| {
+            (0..ni).step_by(every).filter_map(move |i| {
+                let m = self.metres[j * ni + i];
+                m.is_finite().then(|| {
+                    let c = Vector2::new(i as f64 + 0.5, j as f64 + 0.5) * REACH_CELL_M;
+                    (self.first + c, m)
+                })
+            })
+        })
     }
 }
 
@@ -203,11 +219,17 @@ impl<'a> Space<'a> {
         in_room || self.doorways.iter().any(|d| d.contains(p))
     }
 
+    /// How far ahead of the rear axle the body's middle is, m (its field
+    /// and margins included).
+    pub(crate) fn middle_ahead_m(&self) -> f64 {
+        0.5 * (self.front_m - self.rear_m)
+    }
+
     /// The middle of the body (field and margins included) of a robot
     /// at `pose`.
     fn middle(&self, pose: &Pose2) -> Vector2<f64> {
         let f = Vector2::new(pose.theta.cos(), pose.theta.sin());
-        pose.position().coords + f * (0.5 * (self.front_m - self.rear_m))
+        pose.position().coords + f * self.middle_ahead_m()
     }
 
     /// The way over the floor to the body's middle at `goal`: a cell is
@@ -215,8 +237,10 @@ impl<'a> Space<'a> {
     /// less the cell's half-diagonal and a centimetre for the rim's
     /// points) is in the room or a doorway and off every obstacle, so the
     /// middle of every clear pose lies in a free cell and every clear way
-    /// keeps to free cells joined one to the next.
-    fn reach(&self, goal: &Pose2) -> Reach {
+    /// keeps to free cells joined one to the next. The way is the same
+    /// both ways: from a robot standing at `goal`, where its middle can go
+    /// and how far.
+    pub(crate) fn reach(&self, goal: &Pose2) -> Reach {
         let [xs, ys] = self.room_m;
         let pad = if self.doorways.is_empty() {
             0.0

@@ -143,6 +143,27 @@ pub fn depth_of_room(corners: &[[f64; 2]], room_m: [f64; 2], g: &WallGeometry) -
         .fold(0.0, f64::max)
 }
 
+/// Standard deviation of the place of wall `k` across it, m: as the
+/// estimate `est` gives it; from an estimate that does not, a rectangle's
+/// (its east and north walls' the size's, its west and south fixing the
+/// frame).
+pub fn wall_sigma(est: &Estimate, k: usize) -> f64 {
+    est.walls_sigma_m.get(k).copied().unwrap_or(match k {
+        2 => est.room_sigma_m[0],
+        3 => est.room_sigma_m[1],
+        _ => 0.0,
+    })
+}
+
+/// The wall that fixes the frame across wall `k`: a rectangle's west
+/// across its east, its south across its north (each its own); a
+/// polygon's wall 0 for every wall (the wall most square to it holds
+/// the frame along it). A wall's place is measured against it: its σ
+/// falls only while both are seen.
+pub fn anchor_wall(est: &Estimate, k: usize) -> usize {
+    if est.corners.is_empty() { k % 2 } else { 0 }
+}
+
 /// The walls a task names (`Some`), or every wall of the room the
 /// estimate `est` holds (`None`: a task's default).
 pub fn walls_or_all(walls: Option<&[WallName]>, est: &Estimate) -> Vec<WallName> {

@@ -352,6 +352,7 @@ mod tests {
             room_sigma_m: [0.01; 2],
             corners: Vec::new(),
             walls_seen: vec![0; 4],
+            walls_sigma_m: Vec::new(),
             doors: Vec::new(),
             height_m: 2.6,
             windows: Vec::new(),

@@ -39,9 +39,6 @@ pub enum OnTimeout {
 fn survey_speed() -> f64 {
     0.4
 }
-fn survey_inset() -> f64 {
-    1.0
-}
 fn sightings() -> usize {
     20
 }
@@ -85,15 +82,17 @@ fn survey_loop_speed() -> f64 {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "task", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TaskSpec {
-    /// Observes the room's walls while driving loops inside it, until each
-    /// of `walls` has been seen in `min_sightings` scans and each side of
-    /// the room whose two walls are both listed is known to
-    /// `max_size_sigma_m`: walls, size, and the doors seen on the way. (A
-    /// wall hidden behind furniture taller than the laser's plane cannot
-    /// be observed: leave it out, and the size across it stays as planned.)
+    /// Observes the room's walls from the places view planning chooses (or
+    /// while driving a loop given), until each of `walls` has been seen in
+    /// `min_sightings` scans and each one's place, measured against the
+    /// wall that fixes the frame across it, is known to
+    /// `max_size_sigma_m`: walls, size, and the doors seen on the way. A
+    /// wall no place the robot reaches sees (furniture before it along its
+    /// length, too short for a line) is left out and reported
+    /// (`walls_hidden`); its place stays the drawing's.
     MapRoom {
-        /// The loop, room frame, m; by default a rectangle `inset_m` inside
-        /// the walls.
+        /// A loop to drive, room frame, m; by default none: the walls are
+        /// looked at from the places view planning chooses.
         #[serde(default)]
         path: Option<Vec<[f64; 2]>>,
         /// The walls to observe (by default every wall of the room).
@@ -102,9 +101,6 @@ pub enum TaskSpec {
         /// Scans each must have been used in.
         #[serde(default = "sightings")]
         min_sightings: usize,
-        /// Distance of the default loop from the walls, m.
-        #[serde(default = "survey_inset")]
-        inset_m: f64,
         /// Speed, m/s.
         #[serde(default = "survey_speed")]
         speed_mps: f64,
@@ -322,7 +318,6 @@ impl TaskSpec {
             path: None,
             walls: None,
             min_sightings: sightings(),
-            inset_m: survey_inset(),
             speed_mps: survey_speed(),
             max_size_sigma_m: size_sigma(),
             timeout_s: map_timeout(),
@@ -421,7 +416,6 @@ impl TaskSpec {
             TaskSpec::MapRoom {
                 path,
                 walls,
-                inset_m,
                 speed_mps,
                 max_size_sigma_m,
                 timeout_s,
@@ -434,9 +428,6 @@ impl TaskSpec {
                     && (p.len() < 3 || !p.iter().flatten().all(|&v| finite(v)))
                 {
                     return Some(("path", "at least three points, each finite"));
-                }
-                if !positive(*inset_m) {
-                    return Some(("inset_m", "must be positive"));
                 }
                 if !speed(*speed_mps) {
                     return Some(("speed_mps", SPEED));
@@ -609,10 +600,7 @@ mod tests {
         )
         .expect("valid");
         assert_eq!(f.task.len(), 3);
-        assert!(matches!(
-            f.task[0],
-            TaskSpec::MapRoom { inset_m, path: None, .. } if inset_m == 1.0
-        ));
+        assert!(matches!(f.task[0], TaskSpec::MapRoom { path: None, .. }));
         assert_eq!(f.task[1].name(), "follow_wall");
         assert!(f.task.iter().all(|t| t.invalid().is_none()));
     }

@@ -67,6 +67,7 @@ impl Robot {
             room_sigma_m: self.room_sigma,
             corners: Vec::new(),
             walls_seen: self.walls_seen.clone(),
+            walls_sigma_m: Vec::new(),
             doors: self.doors.clone(),
             height_m: 2.6,
             windows: self.windows.clone(),
@@ -692,25 +693,28 @@ fn the_estop_stops_at_once_and_waits_for_release_and_resume() {
     assert!(out.checkpoint_due);
 }
 
-/// A `map_room` on `path` (the default loop 1 m in without), done when
-/// every wall is seen 20 times and the size known to 5 mm.
+/// A `map_room` on `path` (without: from the places view planning
+/// chooses), done when every wall is seen 20 times and the size known to
+/// 5 mm.
 fn map_room(path: Option<Vec<[f64; 2]>>) -> TaskSpec {
     TaskSpec::MapRoom {
         path,
         walls: None,
         min_sightings: 20,
-        inset_m: 1.0,
         speed_mps: 0.4,
         max_size_sigma_m: 0.005,
         timeout_s: 120.0,
     }
 }
 
+/// The loop a mission gives, 1 m inside the 5 × 3 m room's walls.
+const LOOP: [[f64; 2]; 4] = [[1.0, 1.0], [4.0, 1.0], [4.0, 2.0], [1.0, 2.0]];
+
 #[test]
 fn map_room_drives_loops_until_the_room_is_known() {
     let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
     robot.room_sigma = [0.05; 2];
-    let mut exec = executive(vec![map_room(None)], true);
+    let mut exec = executive(vec![map_room(Some(LOOP.to_vec()))], true);
     let mut loops_seen = 0;
     for _ in 0..(120.0 / DT) as usize {
         // The size is learnt on the second loop (a stand-in for the
@@ -736,6 +740,53 @@ fn map_room_drives_loops_until_the_room_is_known() {
     assert!(loops_seen >= 2, "{loops_seen} loops");
 }
 
+/// Without a loop given, `map_room` looks from the places view planning
+/// chooses: a robot with the west wall behind it, outside the laser's
+/// fan, turns or drives to see it, and is done once every wall is seen
+/// and the room's size known, its body in the room all along.
+#[test]
+fn map_room_without_a_loop_goes_where_it_sees_the_walls_it_has_not() {
+    let mut robot = Robot::at(Pose2::new(1.2, 1.5, 0.0));
+    robot.walls_seen = vec![0; 4];
+    robot.room_sigma = [0.05; 2];
+    let mut exec = executive(vec![map_room(None)], true);
+    let middles = [[0.0, 1.5], [2.5, 0.0], [5.0, 1.5], [2.5, 3.0]];
+    let mut west_at = None;
+    for tick in 0..(120.0 / DT) as usize {
+        // A stand-in for the laser: a wall whose middle lies within 120°
+        // of the heading, from the laser 0.35 m ahead of the rear axle,
+        // is seen in this tick's scan; the size is known once every wall
+        // has been seen.
+        let laser = robot.pose.transform_point(&Point2::new(0.35, 0.0));
+        for (k, m) in middles.iter().enumerate() {
+            let bearing = (m[1] - laser.y).atan2(m[0] - laser.x);
+            if wrap_angle(bearing - robot.pose.theta).abs() <= 120f64.to_radians() {
+                robot.walls_seen[k] += 1;
+            }
+        }
+        if robot.walls_seen[0] > 0 && west_at.is_none() {
+            west_at = Some(tick);
+        }
+        if robot.walls_seen.iter().all(|&n| n >= 20) {
+            robot.room_sigma = [0.002; 2];
+        }
+        let out = ask(&mut exec, &robot, Seen::default());
+        robot.drive(out.drive);
+        let p = robot.pose;
+        assert!(p.x > 0.3 && p.x < 4.7 && p.y > 0.3 && p.y < 2.7, "{p:?}");
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert!(west_at.is_some(), "the west wall was never faced");
+    assert_eq!(exec.mode(), &MissionMode::Done);
+    assert!(
+        robot.walls_seen.iter().all(|&n| n >= 20),
+        "{:?}",
+        robot.walls_seen
+    );
+}
+
 /// A room known (its walls seen, its size measured) while the robot is
 /// held between two corners of its loop (someone standing in its way):
 /// map_room is done at its timeout where the robot stands, not failed.
@@ -744,10 +795,9 @@ fn map_room_held_between_corners_with_the_room_known_is_done_at_its_timeout() {
     let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
     robot.room_sigma = [0.05; 2];
     let spec = TaskSpec::MapRoom {
-        path: None,
+        path: Some(LOOP.to_vec()),
         walls: None,
         min_sightings: 20,
-        inset_m: 1.0,
         speed_mps: 0.4,
         max_size_sigma_m: 0.005,
         timeout_s: 20.0,
@@ -2813,7 +2863,7 @@ fn a_map_room_loop_blocked_by_a_box_seen_on_the_way_goes_round_it_corner_to_corn
     // standing before it until the way is given up.
     let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
     robot.room_sigma = [0.05; 2];
-    let mut exec = executive(vec![map_room(None)], true);
+    let mut exec = executive(vec![map_room(Some(LOOP.to_vec()))], true);
     let (lo, hi) = ([2.4, 0.6], [3.0, 1.4]);
     let outline: Vec<Point2<f64>> = (0..=12)
         .flat_map(|k| {

@@ -27,6 +27,11 @@ use stucco_core::{Pose2, wrap_angle};
 /// stands beyond a corner).
 const ALONG_SLACK_M: f64 = 0.2;
 
+/// The σ a polygon's frame-holding wall's offset starts with, m: held to
+/// its drawn value, as a fixed one would be (a state row kept, so the
+/// filter's layout is one for every wall after wall 0).
+const FRAME_HELD_SIGMA_M: f64 = 1e-4;
+
 /// An angle or offset of a wall: fixed, or a row of the state.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Param {
@@ -159,6 +164,33 @@ impl RoomShape {
             };
             walls.push(wall);
         }
+        // Wall 0's line leaves the frame free to slide along it: the walls
+        // and the robot slid together look the same to the laser, held
+        // only by the drawing (~15 mm in the generated rooms, the robot's
+        // place loose by as much however long it looked). The wall most
+        // square to wall 0 (of two alike, the longer) holds its drawn
+        // offset, as a rectangle's south wall holds its frame across the
+        // west's.
+        if let Some(k) = (1..n)
+            .map(|k| {
+                let d = Vector2::from(corners[(k + 1) % n]) - Vector2::from(corners[k]);
+                let d0 = Vector2::from(corners[1]) - Vector2::from(corners[0]);
+                let square = (d0.x * d.y - d0.y * d.x).abs() / (d0.norm() * d.norm());
+                (k, square, d.norm())
+            })
+            .filter(|&(_, square, _)| square > 0.5)
+            .max_by(|a, b| {
+                let alike = |s: f64| (s * 1e6).round();
+                alike(a.1).total_cmp(&alike(b.1)).then(a.2.total_cmp(&b.2))
+            })
+            .map(|(k, ..)| k)
+            && let Some(ShapeWall {
+                offset: Param::Row(r),
+                ..
+            }) = walls.get(k)
+        {
+            drawn[r - 3].1 = FRAME_HELD_SIGMA_M;
+        }
         Ok(RoomShape {
             walls,
             drawn,
@@ -184,6 +216,24 @@ impl RoomShape {
     /// Rows of the state the walls take after the pose.
     pub fn rows(&self) -> usize {
         if self.polygon { self.drawn.len() } else { 2 }
+    }
+
+    /// The row of the state that holds wall `k`'s offset; `None` for a
+    /// wall that fixes the frame (or no such wall).
+    pub fn offset_row(&self, k: usize) -> Option<usize> {
+        match self.walls.get(k)?.offset {
+            Param::Row(r) => Some(r),
+            Param::Fixed(_) => None,
+        }
+    }
+
+    /// The row of the state that holds wall `k`'s normal's angle; `None`
+    /// for a wall whose angle is fixed (a rectangle's, a polygon's wall 0).
+    pub fn angle_row(&self, k: usize) -> Option<usize> {
+        match self.walls.get(k)?.angle {
+            Param::Row(r) => Some(r),
+            Param::Fixed(_) => None,
+        }
     }
 
     /// The drawing's values of the walls' rows and their σ (a polygon's;
@@ -437,6 +487,31 @@ mod tests {
         // From above the notch's line the notch wall faces away.
         let above = Pose2::new(1.0, 4.0, 0.0);
         assert!(!shape.may_see(&x, &c, 2, &above, seg([4.0, 2.5], [5.5, 2.5])));
+    }
+
+    /// An L's frame: wall 0's line, and of the walls square to it the
+    /// longest (wall 5, 5 m) holding its drawn offset; every other row
+    /// starts as loose as drawn.
+    #[test]
+    fn a_polygons_frame_is_held_by_wall_0_and_the_longest_wall_square_to_it() {
+        let l = [
+            [0.0, 0.0],
+            [6.0, 0.0],
+            [6.0, 3.0],
+            [3.0, 3.0],
+            [3.0, 5.0],
+            [0.0, 5.0],
+        ];
+        let shape = RoomShape::polygon(&l, 0.03).expect("an L");
+        let held = shape.offset_row(5).expect("wall 5's offset") - 3;
+        for (i, (_, sigma)) in shape.drawn().iter().enumerate() {
+            if i == held {
+                assert_eq!(*sigma, FRAME_HELD_SIGMA_M);
+            } else {
+                assert!(*sigma > 0.005, "row {i}: {sigma}");
+            }
+        }
+        assert_eq!(shape.offset_row(0), None);
     }
 
     #[test]

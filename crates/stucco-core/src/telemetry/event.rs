@@ -176,6 +176,16 @@ pub enum EventKind {
         /// The room, by its name on the plan.
         room: String,
     },
+    /// `map_room` leaves walls out: no place the robot reaches sees them
+    /// (furniture stands before them along their length, or they are too
+    /// short for the laser to take for a line). Their places stay the
+    /// drawing's.
+    WallsHidden {
+        /// The task.
+        task: usize,
+        /// The walls.
+        walls: Vec<WallName>,
+    },
     /// A plastering plan was made (again, after a survey).
     PlanMade {
         /// The task.
@@ -222,6 +232,7 @@ impl EventKind {
             EventKind::StationDeferred { .. } => "station_deferred",
             EventKind::PassDone { .. } => "pass_done",
             EventKind::RoomEntered { .. } => "room_entered",
+            EventKind::WallsHidden { .. } => "walls_hidden",
             EventKind::PlanMade { .. } => "plan_made",
             EventKind::CommandRefused { .. } => "command_refused",
         }
@@ -251,9 +262,9 @@ mod tests {
                     backing: false,
                 }
                 .to_string(),
-                failure: TaskFailure::NoLoop {
-                    inset_m: 0.45,
-                    room_m: [3.2, 2.9],
+                failure: TaskFailure::WallsNotSeen {
+                    walls: vec![WallName::EAST, WallName::NORTH],
+                    timeout_s: 180.0,
                 },
             },
             EventKind::EStop,

@@ -118,13 +118,9 @@ pub enum TaskFailure {
     },
     /// `map_room`: no clear way reaches any corner of its loop.
     NoWayToCorners,
-    /// `map_room`: the inset leaves no loop in the room.
-    NoLoop {
-        /// The inset, m.
-        inset_m: f64,
-        /// The room's size, m.
-        room_m: [f64; 2],
-    },
+    /// `map_room`: no clear way reaches any place the walls still unseen
+    /// are seen from.
+    NoWayToViews,
     /// `localize`: the position not known well enough in time.
     NotLocalized {
         /// How well it is known, m (σ).
@@ -211,7 +207,7 @@ impl TaskFailure {
             TaskFailure::RoomSizeLoose { .. } => "room_size_loose",
             TaskFailure::WallsNotSeen { .. } => "walls_not_seen",
             TaskFailure::NoWayToCorners => "no_way_to_corners",
-            TaskFailure::NoLoop { .. } => "no_loop",
+            TaskFailure::NoWayToViews => "no_way_to_views",
             TaskFailure::NotLocalized { .. } => "not_localized",
             TaskFailure::NobodyAnswered => "nobody_answered",
             TaskFailure::NoSprayTool => "no_spray_tool",
@@ -318,10 +314,9 @@ impl std::fmt::Display for TaskFailure {
             TaskFailure::NoWayToCorners => {
                 write!(f, "map_room: no clear way reaches any corner of the loop")
             }
-            TaskFailure::NoLoop { inset_m, room_m } => write!(
+            TaskFailure::NoWayToViews => write!(
                 f,
-                "map_room: an inset of {inset_m} m leaves no loop in a {:.2} × {:.2} m room",
-                room_m[0], room_m[1]
+                "map_room: no clear way reaches a place the walls still unseen are seen from"
             ),
             TaskFailure::NotLocalized { sigma_m, timeout_s } => write!(
                 f,

@@ -39,7 +39,8 @@ pub struct Estimate {
     /// room of another shape (its corners within `[0, xs] × [0, ys]`).
     pub room_m: [f64; 2],
     /// Its standard deviation, m (a room of another shape: the least and
-    /// the greatest of its walls' offsets').
+    /// the greatest of its walls' places' across them, of the walls that
+    /// do not fix the frame: see `walls_sigma_m`).
     pub room_sigma_m: [f64; 2],
     /// A room that is not a rectangle: its corners, counter-clockwise,
     /// wall `k` from corner `k` to corner `k + 1` (empty: the rectangle
@@ -48,6 +49,15 @@ pub struct Estimate {
     pub corners: Vec<[f64; 2]>,
     /// Scans each wall (in [`WallName::index`] order) has been used in.
     pub walls_seen: Vec<usize>,
+    /// Standard deviation of each wall's place across it (in
+    /// [`WallName::index`] order), at the worse of its two ends, m: 0 for
+    /// the walls that fix the frame (a rectangle's west and south, a
+    /// polygon's wall 0); a rectangle's east and north its size's; a
+    /// polygon's other walls' as seen from the robot (given its pose: a
+    /// frame one wall fixes slides along it, walls and robot together,
+    /// held only by the drawing).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub walls_sigma_m: Vec<f64>,
     /// The doors known.
     pub doors: Vec<DoorEstimate>,
     /// Height of the ceiling, m.

@@ -28,6 +28,7 @@ use stucco_plan::Plan;
 
 pub(crate) use door::route;
 pub use stucco_core::telemetry::TaskFailure;
+pub(crate) use ways::{estimate_space, planned_way};
 
 /// Why `spec` cannot be carried out in the room `est` knows, if it cannot:
 /// a move that ends outside the room (or within half the body's width of
@@ -245,7 +246,6 @@ impl TaskSpec {
                 path,
                 walls,
                 min_sightings,
-                inset_m,
                 speed_mps,
                 max_size_sigma_m,
                 timeout_s,
@@ -253,7 +253,6 @@ impl TaskSpec {
                 path,
                 walls,
                 min_sightings,
-                inset_m,
                 speed_mps,
                 max_size_sigma_m,
                 timeout_s,

@@ -2,15 +2,12 @@
 //! and the loops a plastering survey drives round a room.
 
 use super::ways::{planned_way, way};
-use super::{
-    Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw,
-    pivot_clearance,
-};
+use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
-use crate::executive::ExecutiveConfig;
-use crate::model::{Estimate, WallGeometry, walls_or_all};
+use crate::executive::{EventKind, ExecutiveConfig};
+use crate::model::{Estimate, WallGeometry, anchor_wall, wall_sigma, walls_or_all};
 use crate::task::WallName;
-use nalgebra::Vector2;
+use crate::views::{NoView, Sight, Spent, View, next_view};
 use stucco_core::{DriveCommand, Obstacle, Pose2, VehicleSpec};
 use stucco_plan::Outline;
 
@@ -19,14 +16,14 @@ use stucco_plan::Outline;
 /// come at 10 Hz) to take something as standing there.
 const LOOK_ROUND_S: f64 = 6.0;
 
-/// Observes the room's walls while driving loops inside it.
+/// Observes the room's walls: from the places view planning chooses, or
+/// while driving a loop a mission gives.
 #[derive(Clone, Debug)]
 pub(crate) struct MapRoom {
     path: Option<Vec<[f64; 2]>>,
     /// The walls to observe; `None`: every wall of the room.
     walls: Option<Vec<WallName>>,
     min_sightings: usize,
-    inset_m: f64,
     speed_mps: f64,
     max_size_sigma_m: f64,
     timeout_s: f64,
@@ -35,14 +32,49 @@ pub(crate) struct MapRoom {
     legs: Option<Legs>,
     /// Walls looked at from where the robot was held, unseen.
     looked: Vec<WallName>,
+    /// Without a loop given: the places looked from.
+    looks: Looks,
 }
+
+/// The places a `map_room` without a loop looks at the walls from.
+#[derive(Clone, Debug, Default)]
+struct Looks {
+    /// The place driven to or looked from, and when the robot stood there
+    /// (the task's time, s).
+    at: Option<(View, Option<f64>)>,
+    /// Places walls were looked at from and not seen.
+    spent: Vec<Spent>,
+    /// Walls no place the body reaches sees (behind what stands before
+    /// them, or too short for the laser to take for a line): left out.
+    hidden: Vec<WallName>,
+    /// No place was found (none sees the walls left, or no clear way
+    /// reaches one): since when, and what the floor map held then. The
+    /// places are chosen again once it holds something else (someone
+    /// who stood in the way walked on); the walls left are given up as
+    /// hidden after [`HIDDEN_WAIT_S`] of it.
+    stuck_on: Option<(f64, Vec<Obstacle>)>,
+    /// Times the way to the place was planned again.
+    replans: usize,
+}
+
+/// Longest a place is looked from while the walls it was chosen for are
+/// not all seen, s: twice the time reckoned (a wall seen in every other
+/// scan, across a doorway someone passes, is seen by then).
+const LOOK_MAX_S: f64 = 2.0 * crate::views::DWELL_S;
+
+/// How long no place is found for the walls still unseen, the floor map
+/// looked at again as it changes, before they are given up as hidden, s:
+/// someone who stood in the way has walked on by then.
+const HIDDEN_WAIT_S: f64 = 15.0;
+
+/// A robot this near a place's pose stands at it, m.
+const AT_PLACE_M: f64 = 0.25;
 
 impl MapRoom {
     pub fn new(
         path: Option<Vec<[f64; 2]>>,
         walls: Option<Vec<WallName>>,
         min_sightings: usize,
-        inset_m: f64,
         speed_mps: f64,
         max_size_sigma_m: f64,
         timeout_s: f64,
@@ -51,19 +83,27 @@ impl MapRoom {
             path,
             walls,
             min_sightings,
-            inset_m,
             speed_mps,
             max_size_sigma_m,
             timeout_s,
             ways: Behaviours::default(),
             legs: None,
             looked: Vec::new(),
+            looks: Looks::default(),
         }
+    }
+
+    /// The walls to observe: those asked for, less those no place sees.
+    fn observed(&self, est: &Estimate) -> Vec<WallName> {
+        walls_or_all(self.walls.as_deref(), est)
+            .into_iter()
+            .filter(|w| !self.looks.hidden.contains(w))
+            .collect()
     }
 
     /// The walls still to be seen.
     fn unseen(&self, est: &Estimate) -> Vec<WallName> {
-        walls_or_all(self.walls.as_deref(), est)
+        self.observed(est)
             .into_iter()
             .filter(|w| {
                 est.walls_seen
@@ -71,6 +111,154 @@ impl MapRoom {
                     .is_none_or(|&n| n < self.min_sightings)
             })
             .collect()
+    }
+
+    /// The uncertainty of each wall observed whose place is not known to
+    /// `max_size_sigma_m` yet, m (σ): of the walls whose place is measured
+    /// against a wall that fixes the frame and is observed too.
+    fn loose(&self, est: &Estimate) -> Vec<f64> {
+        let observed = self.observed(est);
+        observed
+            .iter()
+            .map(|w| w.index())
+            .filter(|&k| observed.iter().any(|a| a.index() == anchor_wall(est, k)))
+            .map(|k| wall_sigma(est, k))
+            .filter(|&s| s > self.max_size_sigma_m)
+            .collect()
+    }
+
+    /// Leaves out the walls `walls` as hidden, telling the log.
+    fn hide(&mut self, cx: &mut TaskCx<'_>, walls: Vec<WallName>) {
+        if walls.is_empty() {
+            return;
+        }
+        self.looks.hidden.extend(walls.iter().copied());
+        cx.emit(EventKind::WallsHidden {
+            task: cx.index,
+            walls,
+        });
+    }
+
+    /// One tick without a loop given: to the place that sees the most of
+    /// the walls still unseen (once all are seen and the room's size is
+    /// still loose, of all of them, place after place), looking from it
+    /// until they are seen; walls no place sees are left out.
+    fn step_views(&mut self, cx: &mut TaskCx<'_>) -> TaskStep {
+        let (config, est) = (cx.config, cx.est);
+        let elapsed = cx.elapsed_s();
+        if !self.ways.idle() {
+            return TaskStep::Drive(self.ways.step(cx).unwrap_or(DriveCommand::STOP));
+        }
+        // The first place waits for the laser to have found what stands
+        // on the floor near the robot (the plan stands on it).
+        if self.looks.at.is_none() && elapsed < LOOK_ROUND_S {
+            return TaskStep::Drive(DriveCommand::STOP);
+        }
+        let unseen = self.unseen(est);
+        if let Some((view, arrived)) = self.looks.at.as_mut() {
+            // The walls it was chosen for and not seen yet (once the room's
+            // size is all that is left, all of them).
+            let still: Vec<WallName> = view
+                .walls
+                .iter()
+                .filter(|w| unseen.is_empty() || unseen.contains(w))
+                .copied()
+                .collect();
+            let off = (est.pose.position() - view.goal.position()).norm();
+            if arrived.is_none() && off > AT_PLACE_M {
+                // Stopped short (the way gave up): the way again.
+                self.looks.replans += 1;
+                let way = (self.looks.replans <= MAX_REPLANS)
+                    .then(|| planned_way(config, est, &est.pose, &view.goal, self.speed_mps))
+                    .flatten();
+                if let Some((_, w)) = way {
+                    self.ways.replace(w);
+                    return TaskStep::Drive(self.ways.step(cx).unwrap_or(DriveCommand::STOP));
+                }
+            } else {
+                let since = *arrived.get_or_insert(elapsed);
+                // Looking: until its walls are seen (once the room's size
+                // is all that is left, the while reckoned).
+                let dwell = if unseen.is_empty() {
+                    crate::views::DWELL_S
+                } else {
+                    LOOK_MAX_S
+                };
+                if elapsed - since < dwell && !still.is_empty() {
+                    return TaskStep::Drive(DriveCommand::STOP);
+                }
+            }
+            let place = view.place;
+            self.looks.at = None;
+            self.looks
+                .spent
+                .extend(still.into_iter().map(|w| (place, w)));
+        }
+        if let Some((since, held)) = &self.looks.stuck_on
+            && elapsed - since < HIDDEN_WAIT_S
+            && !floor_changed(held, &est.obstacles)
+        {
+            return TaskStep::Drive(DriveCommand::STOP);
+        }
+        let targets = if unseen.is_empty() {
+            self.observed(est)
+        } else {
+            unseen.clone()
+        };
+        match next_view(config, est, &targets, &self.looks.spent, self.speed_mps) {
+            Ok(view) => {
+                self.ways.replace(view.way.clone());
+                self.looks.at = Some((view, None));
+                self.looks.replans = 0;
+                self.looks.stuck_on = None;
+            }
+            // Only the size left: round the places again.
+            Err(NoView::Hidden) if unseen.is_empty() => self.looks.spent.clear(),
+            // Seen from no place the body fits, or no clear way to one:
+            // looked for again as the floor map changes, given up as
+            // hidden after a while of it.
+            Err(_) => match self.looks.stuck_on.as_mut() {
+                Some((since, _)) if elapsed - *since >= HIDDEN_WAIT_S && !unseen.is_empty() => {
+                    self.looks.stuck_on = None;
+                    self.hide(cx, unseen);
+                }
+                // Only the size left: another while before looking again.
+                Some((since, held)) => {
+                    if unseen.is_empty() {
+                        *since = elapsed;
+                    }
+                    *held = est.obstacles.clone();
+                }
+                None => self.looks.stuck_on = Some((elapsed, est.obstacles.clone())),
+            },
+        }
+        TaskStep::Drive(self.ways.step(cx).unwrap_or(DriveCommand::STOP))
+    }
+
+    /// Held on the way to a place: the way planned again on what the
+    /// floor map holds now, at most `MAX_REPLANS` times; then the place is
+    /// given up for its walls, and the next chosen next tick.
+    fn views_blocked(&mut self, cx: &mut TaskCx<'_>) -> bool {
+        let (config, est) = (cx.config, cx.est);
+        let Some((view, _)) = self.looks.at.as_ref() else {
+            return false;
+        };
+        if self.looks.replans < MAX_REPLANS {
+            self.looks.replans += 1;
+            if let Some((_, way)) = planned_way(config, est, &est.pose, &view.goal, self.speed_mps)
+            {
+                self.ways.replace(way);
+                return true;
+            }
+        }
+        let place = view.place;
+        let walls = view.walls.clone();
+        self.looks.at = None;
+        self.looks
+            .spent
+            .extend(walls.into_iter().map(|w| (place, w)));
+        self.ways.replace(Vec::new());
+        true
     }
 
     /// Held where it stands (no way reaches a corner, or someone stands
@@ -126,16 +314,20 @@ const LOOK_STEP_RAD: f64 = std::f64::consts::FRAC_PI_6;
 
 impl Task for MapRoom {
     fn start(&mut self, cx: &mut TaskCx<'_>, _: &mut Option<Thaw>) -> Result<(), TaskFailure> {
+        // Walls too short for the laser to take for a line (a chimney
+        // breast's sides) are never seen: left out from the start.
+        let sight = Sight::new(cx.est);
+        let short: Vec<WallName> = walls_or_all(self.walls.as_deref(), cx.est)
+            .into_iter()
+            .filter(|&w| !sight.seeable(w))
+            .collect();
+        self.hide(cx, short);
+        let Some(path) = self.path.as_deref() else {
+            return Ok(());
+        };
         let (config, est, pose) = (cx.config, cx.est, cx.est.pose);
         let speed_mps = self.speed_mps;
-        let end = pivot_clearance(config);
-        let corners = survey_loop(
-            self.path.as_deref(),
-            self.inset_m,
-            est.room_m,
-            &est.corners,
-            end,
-        )?;
+        let corners = path.to_vec();
         if turns_on_the_move(&corners, est.room_m, &est.corners, &config.vehicle) {
             let loop_ = closed(&corners);
             let (a, b) = (loop_[0], loop_[1]);
@@ -158,20 +350,9 @@ impl Task for MapRoom {
     fn step(&mut self, cx: &mut TaskCx<'_>) -> TaskStep {
         let (config, est) = (cx.config, cx.est);
         let elapsed = cx.elapsed_s();
-        let (timeout_s, max_size_sigma_m, speed_mps) =
-            (self.timeout_s, self.max_size_sigma_m, self.speed_mps);
-        let walls = &walls_or_all(self.walls.as_deref(), est);
+        let timeout_s = self.timeout_s;
         let unseen = self.unseen(est);
-        // A side of the room is measured when both its walls are.
-        let listed = |a: WallName, b: WallName| walls.contains(&a) && walls.contains(&b);
-        let sides = [
-            listed(WallName::WEST, WallName::EAST),
-            listed(WallName::SOUTH, WallName::NORTH),
-        ];
-        let loose: Vec<f64> = (0..2)
-            .filter(|&i| sides[i] && est.room_sigma_m[i] > max_size_sigma_m)
-            .map(|i| est.room_sigma_m[i])
-            .collect();
+        let loose = self.loose(est);
         // Known, yet held between corners all this time (someone pacing
         // the corridor it maps): done where it stands, not failed.
         if elapsed > timeout_s && unseen.is_empty() && loose.is_empty() {
@@ -180,6 +361,8 @@ impl Task for MapRoom {
         if elapsed > timeout_s {
             return TaskStep::Failed(if self.legs.as_ref().is_some_and(Legs::stuck) {
                 TaskFailure::NoWayToCorners
+            } else if self.looks.stuck_on.is_some() {
+                TaskFailure::NoWayToViews
             } else if unseen.is_empty() {
                 TaskFailure::RoomSizeLoose {
                     sigma_m: loose.iter().fold(0.0f64, |m, &s| m.max(s)),
@@ -191,6 +374,12 @@ impl Task for MapRoom {
                     timeout_s,
                 }
             });
+        }
+        if self.path.is_none() {
+            if unseen.is_empty() && loose.is_empty() {
+                return TaskStep::Done;
+            }
+            return self.step_views(cx);
         }
         if let (true, Some(legs)) = (self.ways.idle(), self.legs.as_mut()) {
             // The first leg waits for the laser to have found what
@@ -227,26 +416,17 @@ impl Task for MapRoom {
             }
             // Another loop, from where the last one ended: each one
             // sees the walls again.
-            match survey_loop(
-                self.path.as_deref(),
-                self.inset_m,
-                est.room_m,
-                &est.corners,
-                pivot_clearance(config),
-            ) {
-                Ok(l) => {
-                    let gains = &config.gains;
-                    let l = closed(&l);
-                    let towards = (l[1][1] - l[0][1]).atan2(l[1][0] - l[0][0]);
-                    let start = Pose2::new(l[0][0], l[0][1], towards);
-                    self.ways
-                        .queue
-                        .extend(go_to(gains, &est.pose, &start, speed_mps));
-                    self.ways
-                        .queue
-                        .push_back(Behaviour::path(gains, l, speed_mps));
-                }
-                Err(e) => return TaskStep::Failed(e),
+            let gains = &config.gains;
+            let l = closed(self.path.as_deref().unwrap_or_default());
+            if let (Some(a), Some(b)) = (l.first(), l.get(1)) {
+                let start = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
+                let speed_mps = self.speed_mps;
+                self.ways
+                    .queue
+                    .extend(go_to(gains, &est.pose, &start, speed_mps));
+                self.ways
+                    .queue
+                    .push_back(Behaviour::path(gains, l, speed_mps));
             }
         }
         // Let the task-level check decide on the next tick (a survey may
@@ -263,14 +443,11 @@ impl Task for MapRoom {
         // box beside the door it came in by): the loop goes on corner to
         // corner from the end of the side it was on, each leg the planned
         // way round what the map holds by then.
+        if self.path.is_none() {
+            return self.views_blocked(cx);
+        }
         if self.legs.is_none()
-            && let Ok(corners) = survey_loop(
-                self.path.as_deref(),
-                self.inset_m,
-                cx.est.room_m,
-                &cx.est.corners,
-                pivot_clearance(cx.config),
-            )
+            && let Some(corners) = self.path.clone()
         {
             let mut legs = Legs::new(corners, None, self.speed_mps);
             legs.take_over(self.ways.kind());
@@ -646,107 +823,6 @@ fn survey_rect(
     (x1 - x0 >= min_side && y1 - y0 >= min_side).then_some([[x1, y0], [x0, y0], [x0, y1], [x1, y1]])
 }
 
-/// Least distance a default loop keeps from the walls, m: the body's half
-/// width and a protective field's margin.
-const LOOP_WALL_MIN_M: f64 = 0.5;
-/// How much wider than its body and its field's margins either side a
-/// room must be for a default loop in it, m.
-const NARROW_LOOP_M: f64 = 0.1;
-
-/// The survey loop: the given path or a rectangle `inset_m` inside the
-/// room; in a room narrower than twice that (a hall, a corridor), its
-/// middle line from `end_m` off one end to `end_m` off the other, driven
-/// there and back.
-fn survey_loop(
-    path: Option<&[[f64; 2]]>,
-    inset_m: f64,
-    room_m: [f64; 2],
-    outline: &[[f64; 2]],
-    end_m: f64,
-) -> Result<Vec<[f64; 2]>, TaskFailure> {
-    if let Some(p) = path {
-        return Ok(p.to_vec());
-    }
-    // A room of another shape: its own outline moved in (an L's loop
-    // turns six corners, none in the notch its box would put one in), as
-    // far in as asked where the room leaves that, else as little nearer
-    // the walls as it does.
-    if !outline.is_empty()
-        && let Some(l) = [1.0, 0.75, 0.5]
-            .iter()
-            .map(|f| f * inset_m)
-            .filter(|&d| d >= LOOP_WALL_MIN_M)
-            .find_map(|d| inset_outline(outline, d))
-    {
-        return Ok(l);
-    }
-    let [xs, ys] = room_m;
-    // The inset asked for where the room leaves a loop that far in;
-    // squeezed into a narrower room, no nearer the walls than the body
-    // passes.
-    let inset_m = if 2.0 * inset_m < xs.min(ys) {
-        inset_m
-    } else {
-        let narrow = 0.5 * (xs.min(ys) - NARROW_LOOP_M);
-        if narrow < LOOP_WALL_MIN_M || 2.0 * narrow >= xs.max(ys) {
-            return Err(TaskFailure::NoLoop { inset_m, room_m });
-        }
-        // Along its middle, end to end and back: a leg across a room
-        // this narrow would stand the body across it, which it cannot.
-        // Each end `end_m` from the end wall, where the body and its
-        // field fit facing it.
-        let mid = [0.5 * xs, 0.5 * ys];
-        let end = end_m.max(narrow).min(0.5 * xs.max(ys));
-        return Ok(if xs >= ys {
-            vec![[end, mid[1]], [xs - end, mid[1]]]
-        } else {
-            vec![[mid[0], end], [mid[0], ys - end]]
-        });
-    };
-    Ok(vec![
-        [inset_m, inset_m],
-        [xs - inset_m, inset_m],
-        [xs - inset_m, ys - inset_m],
-        [inset_m, ys - inset_m],
-    ])
-}
-
-/// The corners of the room drawn by `corners` (counter-clockwise) with
-/// every wall moved `inset_m` in, each two walls one after the other met
-/// (walls in one line: the corner between them dropped). `None` where a
-/// corner so found stands nearer a wall than the inset (a part of the
-/// room narrower than twice it) or the loop turns over.
-fn inset_outline(corners: &[[f64; 2]], inset_m: f64) -> Option<Vec<[f64; 2]>> {
-    let n = corners.len();
-    let at = |k: usize| Vector2::from(corners[k % n]);
-    // Each wall's line moved in: a point on it and its direction.
-    let lines: Vec<(Vector2<f64>, Vector2<f64>)> = (0..n)
-        .filter_map(|k| {
-            let d = (at(k + 1) - at(k)).try_normalize(1e-9)?;
-            Some((at(k) + Vector2::new(-d.y, d.x) * inset_m, d))
-        })
-        .collect();
-    let m = lines.len();
-    let mut out: Vec<[f64; 2]> = Vec::with_capacity(m);
-    for k in 0..m {
-        let ((p0, d0), (p1, d1)) = (lines[(k + m - 1) % m], lines[k]);
-        let cross = d0.x * d1.y - d0.y * d1.x;
-        if cross.abs() < 1e-6 {
-            continue;
-        }
-        let t = ((p1 - p0).x * d1.y - (p1 - p0).y * d1.x) / cross;
-        let q = p0 + d0 * t;
-        out.push([q.x, q.y]);
-    }
-    let loop_ = Outline::new(&out);
-    let room = Outline::new(corners);
-    let clear = out
-        .iter()
-        .all(|c| room.clearance_m(&(*c).into()) >= inset_m - 1e-6);
-    (out.len() >= 3 && loop_.signed_area_m2() > 0.0 && loop_.fault().is_none() && clear)
-        .then_some(out)
-}
-
 /// Margin a loop's corners keep from the walls beyond the front's reach
 /// ahead of the rear axle, for the loop to be turned on the move, m.
 const ON_THE_MOVE_SPARE_M: f64 = 0.1;
@@ -792,76 +868,6 @@ fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// An L-shaped room's loop runs its own six corners 1 m in, none in
-    /// the notch (its box's loop put a corner there, outside the room: no
-    /// way reached it); a room too narrow for the loop asked runs one
-    /// nearer its walls.
-    #[test]
-    fn an_l_rooms_loop_follows_its_walls_not_its_box() {
-        let l = [
-            [0.0, 0.0],
-            [6.0, 0.0],
-            [6.0, 3.0],
-            [3.0, 3.0],
-            [3.0, 5.0],
-            [0.0, 5.0],
-        ];
-        let lp = survey_loop(None, 1.0, [6.0, 5.0], &l, 1.0).unwrap_or_default();
-        let want = [
-            [1.0, 1.0],
-            [5.0, 1.0],
-            [5.0, 2.0],
-            [2.0, 2.0],
-            [2.0, 4.0],
-            [1.0, 4.0],
-        ];
-        assert_eq!(lp.len(), want.len(), "{lp:?}");
-        for (a, b) in lp.iter().zip(want) {
-            assert!(
-                (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
-                "{lp:?}"
-            );
-        }
-        // Its arm 1.6 m wide: the loop 0.75 m in.
-        let narrow = [
-            [0.0, 0.0],
-            [6.0, 0.0],
-            [6.0, 1.6],
-            [1.6, 1.6],
-            [1.6, 5.0],
-            [0.0, 5.0],
-        ];
-        let lp = survey_loop(None, 1.0, [6.0, 5.0], &narrow, 1.0).unwrap_or_default();
-        assert_eq!(lp.first(), Some(&[0.75, 0.75]), "{lp:?}");
-    }
-
-    #[test]
-    fn the_default_loop_squeezes_into_a_hall_and_gives_up_where_the_body_cannot_pass() {
-        // A room: the loop 1 m inside its walls.
-        let open = survey_loop(None, 1.0, [5.0, 4.0], &[], 1.0).unwrap_or_default();
-        assert_eq!(open, [[1.0, 1.0], [4.0, 1.0], [4.0, 3.0], [1.0, 3.0]]);
-        // A 1.6 m hall: its middle line, each end 1 m off the end wall (a
-        // leg across it would stand the body across the hall).
-        let hall = survey_loop(None, 1.0, [5.5, 1.6], &[], 1.0).unwrap_or_default();
-        assert_eq!(hall, [[1.0, 0.8], [4.5, 0.8]]);
-        let upright = survey_loop(None, 1.0, [1.6, 5.5], &[], 1.0).unwrap_or_default();
-        assert_eq!(upright, [[0.8, 1.0], [0.8, 4.5]]);
-        // Narrower than the body and its field: no loop.
-        assert!(matches!(
-            survey_loop(None, 1.0, [5.0, 1.0], &[], 1.0),
-            Err(TaskFailure::NoLoop { .. })
-        ));
-        // A small inset asked for in a room that leaves it is kept.
-        let near = survey_loop(None, 0.3, [5.0, 4.0], &[], 1.0).unwrap_or_default();
-        assert_eq!(near[0], [0.3, 0.3]);
-        // A loop given is driven as given.
-        let given = [[0.5, 0.5], [1.0, 0.5]];
-        assert_eq!(
-            survey_loop(Some(&given), 1.0, [1.2, 1.2], &[], 1.0).unwrap_or_default(),
-            given
-        );
-    }
 
     #[test]
     fn the_floor_map_has_changed_when_a_piece_comes_goes_or_moves_not_when_it_jitters() {
