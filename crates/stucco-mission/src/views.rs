@@ -12,11 +12,12 @@
 use crate::behaviour::{Behaviour, go_to};
 use crate::executive::ExecutiveConfig;
 use crate::model::{Estimate, WallGeometry, room_walls};
+use crate::route::rect_clear;
 use crate::task::WallName;
 use crate::tasks::planned_way;
-use nalgebra::Vector2;
+use nalgebra::{Point2, Vector2};
 use stucco_core::{Obstacle, Pose2, wrap_angle};
-use stucco_plan::Outline;
+use stucco_plan::{Outline, segments_meet};
 
 /// Spacing of the points along a wall checked for a line of sight, m.
 const SAMPLE_M: f64 = 0.1;
@@ -100,7 +101,7 @@ impl<'a> Sight<'a> {
         let (mut best, mut start): ((f64, f64), Option<f64>) = ((0.0, 0.0), None);
         for k in 0..=n {
             let at = (k as f64 + 0.5) * step;
-            let seen = at < g.length_m && self.in_sight(p, g, at);
+            let seen = at < g.length_m && self.in_sight(p, w, g, at);
             match (seen, start) {
                 (true, None) => start = Some(at),
                 (false, Some(s)) => {
@@ -116,10 +117,11 @@ impl<'a> Sight<'a> {
         (best.1 - best.0 + step >= need).then(|| g.point(0.5 * (best.0 + best.1), 0.0))
     }
 
-    /// True when the point `at_m` along wall `g` is in the laser's sight
-    /// from `p`: in front of the wall, in range, not too slant, and no
-    /// other wall nor anything on the floor in the beam's way.
-    fn in_sight(&self, p: &Vector2<f64>, g: &WallGeometry, at_m: f64) -> bool {
+    /// True when the point `at_m` along wall `w` (its line `g`) is in the
+    /// laser's sight from `p`: in front of the wall, in range, not too
+    /// slant, and no other wall nor anything on the floor in the beam's
+    /// way.
+    fn in_sight(&self, p: &Vector2<f64>, w: WallName, g: &WallGeometry, at_m: f64) -> bool {
         let q = g.point(at_m, 0.0);
         let d = p - q;
         let r = d.norm();
@@ -131,53 +133,24 @@ impl<'a> Sight<'a> {
         if cos < SLANT_MAX_RAD.cos() || r / cos > SPREAD_M {
             return false;
         }
-        let walls_clear = self.walls.iter().all(|(_, o)| {
-            std::ptr::eq(o, g) || !crosses(p, &q, &o.origin, &o.point(o.length_m, 0.0))
+        let (from, to) = (Point2::from(*p), Point2::from(q));
+        let walls_clear = self.walls.iter().all(|(n, o)| {
+            *n == w
+                || !segments_meet(
+                    &from,
+                    &to,
+                    &o.origin.into(),
+                    &o.point(o.length_m, 0.0).into(),
+                )
         });
+        // The beam as a rectangle of no width, and nothing on the floor
+        // within it.
+        let beam = q - p;
         walls_clear
-            && self
-                .obstacles
-                .iter()
-                .all(|o| !segment_meets_box(p, &q, o.min_m, o.max_m))
+            && beam.try_normalize(1e-9).is_none_or(|f| {
+                rect_clear(self.obstacles, &(p + 0.5 * beam), &f, [0.5 * r, 0.0], 0.0)
+            })
     }
-}
-
-/// True when the segments `a`–`b` and `c`–`d` cross (touching at `b`,
-/// the wall's point looked at, does not count).
-fn crosses(a: &Vector2<f64>, b: &Vector2<f64>, c: &Vector2<f64>, d: &Vector2<f64>) -> bool {
-    let (r, s) = (b - a, d - c);
-    let den = r.x * s.y - r.y * s.x;
-    if den.abs() < 1e-12 {
-        return false;
-    }
-    let w = c - a;
-    let t = (w.x * s.y - w.y * s.x) / den;
-    let u = (w.x * r.y - w.y * r.x) / den;
-    (0.0..1.0 - 1e-6).contains(&t) && (0.0..=1.0).contains(&u)
-}
-
-/// True when the segment `a`–`b` meets the box `min`–`max` (slab by slab).
-fn segment_meets_box(a: &Vector2<f64>, b: &Vector2<f64>, min: [f64; 2], max: [f64; 2]) -> bool {
-    let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for i in 0..2 {
-        if d[i].abs() < 1e-12 {
-            if a[i] < min[i] || a[i] > max[i] {
-                return false;
-            }
-            continue;
-        }
-        let (mut lo, mut hi) = ((min[i] - a[i]) / d[i], (max[i] - a[i]) / d[i]);
-        if lo > hi {
-            std::mem::swap(&mut lo, &mut hi);
-        }
-        t0 = t0.max(lo);
-        t1 = t1.min(hi);
-        if t0 > t1 {
-            return false;
-        }
-    }
-    true
 }
 
 /// A place to look from: the pose to stand at, the walls it sees, and the

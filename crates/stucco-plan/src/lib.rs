@@ -40,7 +40,7 @@ mod surface;
 mod tool;
 
 pub use coverage::{RoomScore, SurfaceScore, minimum_spray_m2, predict, predicted_score, score};
-pub use outline::Outline;
+pub use outline::{Outline, segments_meet};
 pub use planner::{Lane, Move, PLAN_CELL_M, Pass, Plan, ReachMask, Station, Unreachable, plan};
 pub use surface::{
     Obstacle, Opening, OpeningKind, Rect, RoomModel, Surface, SurfaceId, WallLine, WallOpening,

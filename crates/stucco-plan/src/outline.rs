@@ -167,7 +167,7 @@ pub fn segment_distance(a: &Point2<f64>, b: &Point2<f64>, p: &Point2<f64>) -> f6
 }
 
 /// True when the segments `a`–`b` and `c`–`d` cross or touch.
-fn segments_meet(a: &Point2<f64>, b: &Point2<f64>, c: &Point2<f64>, d: &Point2<f64>) -> bool {
+pub fn segments_meet(a: &Point2<f64>, b: &Point2<f64>, c: &Point2<f64>, d: &Point2<f64>) -> bool {
     let cross = |o: &Point2<f64>, p: &Point2<f64>, q: &Point2<f64>| {
         let (u, v): (Vector2<f64>, Vector2<f64>) = (p - o, q - o);
         u.x * v.y - u.y * v.x

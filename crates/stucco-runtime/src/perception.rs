@@ -717,14 +717,13 @@ impl Perception {
         // would be 16 mm loose there and known to the millimetre along
         // its own stretch).
         let n_walls = self.room.walls_seen.len();
-        let cov = |i: usize, j: usize| p[(i, j)];
         let walls_sigma_m: Vec<f64> = (0..n_walls)
             .map(|k| {
                 let Some(r) = shape.offset_row(k) else {
                     return 0.0;
                 };
                 let Some(a) = shape.angle_row(k) else {
-                    return cov(r, r).max(0.0).sqrt();
+                    return p[(r, r)].max(0.0).sqrt();
                 };
                 let phi = x[a];
                 let t = nalgebra::Vector2::new(-phi.sin(), phi.cos());
@@ -733,7 +732,7 @@ impl Perception {
                     .filter_map(|&c| corners.get(c))
                     .map(|c| {
                         let l = t.dot(&nalgebra::Vector2::from(*c));
-                        (l * l * cov(a, a) - 2.0 * l * cov(a, r) + cov(r, r))
+                        (l * l * p[(a, a)] - 2.0 * l * p[(a, r)] + p[(r, r)])
                             .max(0.0)
                             .sqrt()
                     })
@@ -1588,18 +1587,10 @@ mod tests {
     #[allow(clippy::expect_used)]
     fn a_room_kept_as_a_polygon_maps_its_floor_as_a_rectangle_does() {
         let seen = |polygon: bool| {
-            let (mut robot, _) = at_the_apartments_start();
-            if polygon {
-                let corners = [[5.0, 2.85], [0.0, 2.85], [0.0, 0.0], [5.0, 0.0]];
-                robot
-                    .perception_mut()
-                    .keep_room_drawn(&corners, 0.01)
-                    .expect("a room");
-            }
-            for _ in 0..(10.0 / DT_S) as usize {
-                drive(&mut robot, 0.0, 0.0);
-            }
-            robot.perception().floor_obstacles()
+            let drawn = polygon.then_some((&NE_RECTANGLE[..], 0.01));
+            standing_at_the_apartments_start(drawn, 10.0)
+                .perception()
+                .floor_obstacles()
         };
         let (rectangle, polygon) = (seen(false), seen(true));
         assert!(!rectangle.is_empty());
@@ -1627,15 +1618,7 @@ mod tests {
     #[test]
     #[allow(clippy::expect_used)]
     fn a_polygon_rooms_frame_is_held_by_two_walls() {
-        let corners = [[5.0, 2.85], [0.0, 2.85], [0.0, 0.0], [5.0, 0.0]];
-        let (mut robot, _) = at_the_apartments_start();
-        robot
-            .perception_mut()
-            .keep_room_drawn(&corners, 0.03)
-            .expect("a room");
-        for _ in 0..(10.0 / DT_S) as usize {
-            drive(&mut robot, 0.0, 0.0);
-        }
+        let robot = standing_at_the_apartments_start(Some((&NE_RECTANGLE, 0.03)), 10.0);
         let est = robot.perception().mission_estimate();
         let sigma = &est.walls_sigma_m;
         println!(
@@ -1660,6 +1643,31 @@ mod tests {
         // 20 legs of 3 s and half the next: in the middle, walking; their
         // whole walk, both turning points, clear.
         pacing_not_mapped_within(61.5, [3.0, 0.3], [3.4, 2.5]);
+    }
+
+    /// The living room's rectangle drawn as a polygon from its north-east
+    /// corner (wall 0 its north wall).
+    const NE_RECTANGLE: [[f64; 2]; 4] = [[5.0, 2.85], [0.0, 2.85], [0.0, 0.0], [5.0, 0.0]];
+
+    /// A robot at the apartment's start, its room kept as `drawn` (the
+    /// corners, each off by up to the σ given) when given, standing
+    /// `seconds`.
+    #[allow(clippy::expect_used)]
+    fn standing_at_the_apartments_start(
+        drawn: Option<(&[[f64; 2]], f64)>,
+        seconds: f64,
+    ) -> Robot<Simulator> {
+        let (mut robot, _) = at_the_apartments_start();
+        if let Some((corners, sigma)) = drawn {
+            robot
+                .perception_mut()
+                .keep_room_drawn(corners, sigma)
+                .expect("a room");
+        }
+        for _ in 0..(seconds / DT_S) as usize {
+            drive(&mut robot, 0.0, 0.0);
+        }
+        robot
     }
 
     /// A robot on `sim` with `perception` whose executive idles.

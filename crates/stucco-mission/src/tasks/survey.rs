@@ -143,7 +143,7 @@ impl MapRoom {
     /// the walls still unseen (once all are seen and the room's size is
     /// still loose, of all of them, place after place), looking from it
     /// until they are seen; walls no place sees are left out.
-    fn step_views(&mut self, cx: &mut TaskCx<'_>) -> TaskStep {
+    fn step_views(&mut self, cx: &mut TaskCx<'_>, unseen: Vec<WallName>) -> TaskStep {
         let (config, est) = (cx.config, cx.est);
         let elapsed = cx.elapsed_s();
         if !self.ways.idle() {
@@ -154,7 +154,6 @@ impl MapRoom {
         if self.looks.at.is_none() && elapsed < LOOK_ROUND_S {
             return TaskStep::Drive(DriveCommand::STOP);
         }
-        let unseen = self.unseen(est);
         if let Some((view, arrived)) = self.looks.at.as_mut() {
             // The walls it was chosen for and not seen yet (once the room's
             // size is all that is left, all of them).
@@ -212,8 +211,11 @@ impl MapRoom {
                 self.looks.replans = 0;
                 self.looks.stuck_on = None;
             }
-            // Only the size left: round the places again.
-            Err(NoView::Hidden) if unseen.is_empty() => self.looks.spent.clear(),
+            // Only the size left: round the places again (none seen from
+            // any place, even so: wait as below, not a search a tick).
+            Err(NoView::Hidden) if unseen.is_empty() && !self.looks.spent.is_empty() => {
+                self.looks.spent.clear();
+            }
             // Seen from no place the body fits, or no clear way to one:
             // looked for again as the floor map changes, given up as
             // hidden after a while of it.
@@ -379,7 +381,7 @@ impl Task for MapRoom {
             if unseen.is_empty() && loose.is_empty() {
                 return TaskStep::Done;
             }
-            return self.step_views(cx);
+            return self.step_views(cx, unseen);
         }
         if let (true, Some(legs)) = (self.ways.idle(), self.legs.as_mut()) {
             // The first leg waits for the laser to have found what
