@@ -87,7 +87,9 @@ pub struct SafetyConfig {
     pub on_task_failure: FailurePolicy,
     /// With nobody there, a touch (the bumper) holds the robot, the spray
     /// off, until the bumper has been free for `clear_s`; the task fails
-    /// when the touches go on this long, s.
+    /// when the touches go on this long, s (each within this long of the
+    /// last: a robot pushing every half second into someone it cannot see
+    /// is touching them still).
     pub touch_timeout_s: f64,
 }
 

@@ -638,6 +638,27 @@ fn a_touch_with_nobody_there_holds_the_robot_until_it_is_free() {
     let t = failed_at.expect("failed");
     assert!((t - timeout).abs() < 0.1, "failed after {t} s");
     assert!(matches!(exec.mode(), MissionMode::Failed { .. }));
+    // Touches that keep coming back, the hold letting go between them (a
+    // robot pushing into someone it cannot see): the task fails after the
+    // timeout as well. The robot is held where it is (something behind the
+    // bumper), its task not done.
+    let mut robot = Robot::at(Pose2::new(1.0, 1.5, 0.0));
+    let mut exec = executive(vec![forward(2.0)], true);
+    let every = (2.0 / DT) as usize;
+    let mut failed_at = None;
+    let mut moved = 0;
+    for k in 0..((timeout + 10.0) / DT) as usize {
+        let out = touched(&mut exec, &robot, k >= 50 && k % every < 5);
+        moved += usize::from(out.drive.speed_mps > 0.0);
+        robot.drive(DriveCommand::STOP);
+        if exec.mode().is_final() {
+            failed_at = Some(k as f64 * DT - 1.0);
+            break;
+        }
+    }
+    let t = failed_at.expect("failed");
+    assert!((t - timeout).abs() < 2.0, "failed after {t} s");
+    assert!(moved > every, "the hold let go between touches");
 }
 
 #[test]

@@ -27,12 +27,13 @@ pub const KEEP_S: f64 = 300.0;
 /// How far from the robot an echo is kept, m: a robot reversing at its
 /// top speed for a minute gets no nearer to an echo it forgot.
 pub const RADIUS_M: f64 = 8.0;
-/// How long an echo of something moving (a person walking) is kept once
-/// the laser no longer sees it, s: a person walks a metre a second, and
-/// where they were three seconds ago says nothing of where they are (the
-/// bumper and the field ahead still guard the robot). Kept for minutes,
-/// a person who walked off behind a robot in a corridor held it there.
-pub const MOVING_KEEP_S: f64 = 3.0;
+/// How long an echo of something moving (a person walking or waiting,
+/// followed as a mover, or touched by the bumper) is kept once the
+/// laser no longer sees it, s: long enough for someone the robot backed
+/// into to step away, short of a task's patience for a blocked way.
+/// Kept for minutes, a person who walked off behind a robot in a corridor
+/// held it there.
+pub const MOVING_KEEP_S: f64 = 10.0;
 /// Scans [`RecentScans`] keeps: half a second of the IBEO's.
 pub const RECENT_SCANS: usize = 4;
 
@@ -120,6 +121,25 @@ impl EchoMemory {
                     .is_none()
                     .then(|| to_robot.transform_point(&p))
             }));
+    }
+
+    /// Something the bumper touched at `at` (room frame, seen at
+    /// `stamp`): kept as the echo of something moving, [`MOVING_KEEP_S`],
+    /// and out of view until the next scan tells otherwise.
+    pub fn touched(&mut self, stamp: Stamp, pose: &Pose2, at: &[Point2<f64>]) {
+        let to_robot = pose.inverse();
+        for &p in at {
+            let key = ((p.x / CELL_M).floor() as i64, (p.y / CELL_M).floor() as i64);
+            self.cells.insert(
+                key,
+                Kept {
+                    at: p,
+                    seen: stamp,
+                    moving: true,
+                },
+            );
+            self.unseen.push(to_robot.transform_point(&p));
+        }
     }
 
     /// The kept echoes out of the laser's view at the last scan, in the

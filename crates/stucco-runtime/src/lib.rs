@@ -63,12 +63,14 @@
 mod checkpoint;
 mod echoes;
 mod event_log;
+mod movers;
 mod perception;
 mod robot;
 
 pub use checkpoint::{Checkpointer, TaskTimes, windows_by_room};
 pub use echoes::{EchoMemory, RecentScans};
 pub use event_log::EventLog;
+pub use movers::Movers;
 pub use perception::{DT_S, OBSTACLE_HEIGHT_M, Perception, RoomWindows};
 pub use robot::{Robot, Sink, SinkError};
 // The job's files are stucco-mission's; here for the runtime's users.

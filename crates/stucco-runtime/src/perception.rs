@@ -5,7 +5,7 @@
 //! what stands on the floor mapped. It knows nothing of where its readings
 //! come from: the simulator and a real robot feed it alike.
 
-use crate::{EchoMemory, RecentScans};
+use crate::{EchoMemory, Movers, RecentScans};
 use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_core::{EncoderSample, Pose2, Readings, RobotSpec, Stamp, TOOL_CAMERA, Twist2};
 use stucco_mission::{
@@ -42,6 +42,11 @@ pub struct Perception {
     echoes: EchoMemory,
     /// The last scans, to tell echoes of what moves (people walking).
     recent: RecentScans,
+    /// Blobs followed scan to scan, to tell people who stop.
+    movers: Movers,
+    /// The body's faces in the robot's frame: behind, ahead and either
+    /// side of the rear axle, m.
+    body: [f64; 3],
     /// How far the laser's echoes of a wall scatter off it (4 σ of its
     /// range noise: 3 σ was measured too few, a robot at a station sees a
     /// wall's stretch in tens of thousands of beams), m.
@@ -153,6 +158,39 @@ fn own_walls(est: &Estimate, band_m: f64) -> OwnWalls {
         })
         .collect();
     OwnWalls { walls, band }
+}
+
+/// Where an echo is of something standing on the room's floor: inside
+/// the room, off its walls by a band widened by the estimate's σ. None
+/// while the robot does not know where it is (echoes placed from a lost
+/// estimate would smear walls into the room).
+struct OnFloor<'a> {
+    outline: Option<stucco_plan::Outline<'a>>,
+    room_m: [f64; 2],
+    off_m: f64,
+}
+
+impl<'a> OnFloor<'a> {
+    fn of(est: &'a Estimate) -> Option<Self> {
+        if est.position_sigma_m > FLOOR_MAX_SIGMA_M {
+            return None;
+        }
+        let room_sigma = est.room_sigma_m.iter().fold(0.0f64, |a, &b| a.max(b));
+        Some(OnFloor {
+            outline: (!est.corners.is_empty()).then(|| stucco_plan::Outline::new(&est.corners)),
+            room_m: est.room_m,
+            off_m: FLOOR_OFF_WALL_M + FLOOR_SIGMAS * (est.position_sigma_m + room_sigma),
+        })
+    }
+
+    /// True when an echo at `p` (room frame) is of something standing.
+    fn holds(&self, p: &Point2<f64>) -> bool {
+        let ([xs, ys], off) = (self.room_m, self.off_m);
+        match &self.outline {
+            Some(o) => o.clearance_m(p) >= off,
+            None => p.x >= off && p.y >= off && p.x <= xs - off && p.y <= ys - off,
+        }
+    }
 }
 
 /// A connected group of floor cells: its lowest and highest cells.
@@ -491,6 +529,12 @@ impl Perception {
             obstacles: Vec::new(),
             echoes: EchoMemory::default(),
             recent: RecentScans::new(robot.laser.range_sigma_m),
+            movers: Movers::default(),
+            body: [
+                vehicle.rear_overhang_m,
+                vehicle.length_m - vehicle.rear_overhang_m,
+                0.5 * vehicle.width_m,
+            ],
             wall_band_m: WALL_BAND_SIGMAS * robot.laser.range_sigma_m,
             discover_doors: false,
             scans: 0,
@@ -620,30 +664,22 @@ impl Perception {
         // entered, its size the drawing's, what stands in the middle is
         // mapped at once, before the loop that measures the room drives
         // into it.
-        if est.position_sigma_m > FLOOR_MAX_SIGMA_M {
+        let Some(on_floor) = OnFloor::of(est) else {
             return;
-        }
-        let room_sigma = est.room_sigma_m.iter().fold(0.0f64, |a, &b| a.max(b));
-        let off = FLOOR_OFF_WALL_M + FLOOR_SIGMAS * (est.position_sigma_m + room_sigma);
+        };
         // The echoes are placed from the pose the scan was taken at (its
         // first beam), the estimate's pose moved back by the motion since.
         let back = est.stamp.seconds_since(stamp).max(0.0);
         let then = est.pose
             * Twist2::new(-twist.vx_mps, -twist.vy_mps, -twist.omega_radps).displacement(back);
         let laser = then * self.mount;
-        let [xs, ys] = est.room_m;
-        let outline = (!est.corners.is_empty()).then(|| stucco_plan::Outline::new(&est.corners));
         let from = laser.position();
         for (q, moving) in pts.points().iter().zip(moving) {
             let p = laser.transform_point(&q.p);
             // Every beam clears what it passed; an echo off the walls
             // is something standing.
             self.room.floor.pass(&from, &p);
-            let off_walls = match &outline {
-                Some(o) => o.clearance_m(&p) >= off,
-                None => p.x >= off && p.y >= off && p.x <= xs - off && p.y <= ys - off,
-            };
-            if off_walls && !moving {
+            if on_floor.holds(&p) && !moving {
                 self.room.floor.hit(&p);
             }
         }
@@ -674,6 +710,31 @@ impl Perception {
     /// robot), in the robot's frame at the last scan.
     pub fn unseen_echoes(&self) -> &[Point2<f64>] {
         self.echoes.unseen()
+    }
+
+    /// The bumper touched something while the robot drove `forward` (or
+    /// backed): the body's face that way is kept as the echo of
+    /// something moving just beyond it, so the field holds the robot from
+    /// pushing on into it — behind, where the laser does not look,
+    /// nothing else would (a person who walked up behind a robot about to
+    /// back was pushed every half second, the bumper's hold over).
+    pub fn touched(&mut self, forward: bool) {
+        let (x, _) = self.room.ekf.now();
+        let pose = Pose2::new(x[0], x[1], x[2]);
+        let [rear, front, half] = self.body;
+        let face = if forward {
+            front + crate::echoes::CELL_M
+        } else {
+            -rear - crate::echoes::CELL_M
+        };
+        let across = (2.0 * half / crate::echoes::CELL_M).ceil() as usize;
+        let at: Vec<Point2<f64>> = (0..=across)
+            .map(|k| {
+                let y = -half + 2.0 * half * k as f64 / across as f64;
+                pose.transform_point(&Point2::new(face, y))
+            })
+            .collect();
+        self.echoes.touched(self.now, &pose, &at);
     }
 
     /// The estimate as the executive reads it, its spreads those of its
@@ -888,6 +949,7 @@ impl Perception {
         // The echoes kept are in the frame being left.
         self.echoes.clear();
         self.recent.clear();
+        self.movers.clear();
         let (x, p) = self.room.ekf.now();
         let pose = Pose2::new(x[0], x[1], x[2]);
         let (corners, size) = self.room.geometry();
@@ -1019,20 +1081,34 @@ impl Perception {
             // placed from the pose then (the pose now, after the period's
             // odometry, is a few degrees on in a turn, and put a table's
             // leg 20 cm from where it stands: measured). Each is told
-            // moving or not once, for the floor map and the echo memory.
+            // moving or not once, for the floor map and the echo memory:
+            // where a recent beam passed, or of a blob followed since it
+            // moved.
             let (x, _, at) = self.room.ekf.at_last_scan();
             let placed = (at == scan.stamp).then(|| Pose2::new(x[0], x[1], x[2]));
+            let est = self.mission_estimate();
+            let walls = own_walls(&est, self.wall_band_m);
             let moving: Vec<bool> = match placed {
                 Some(pose) => {
                     let sensor = pose * self.mount;
-                    pts.points()
+                    let seen: Vec<Point2<f64>> = pts
+                        .points()
                         .iter()
-                        .map(|q| self.recent.saw_through(&sensor.transform_point(&q.p)))
-                        .collect()
+                        .map(|q| sensor.transform_point(&q.p))
+                        .collect();
+                    let through: Vec<bool> =
+                        seen.iter().map(|p| self.recent.saw_through(p)).collect();
+                    // Only what stands on the floor is followed: what is
+                    // seen through a doorway slides as the view turns.
+                    let on_floor = OnFloor::of(&est);
+                    let standing: Vec<bool> = seen
+                        .iter()
+                        .map(|p| on_floor.as_ref().is_some_and(|f| f.holds(p)))
+                        .collect();
+                    self.movers.scan(scan.stamp, &seen, &standing, &through)
                 }
                 None => vec![false; pts.points().len()],
             };
-            let est = self.mission_estimate();
             self.note_floor(&est, &pts, &moving, &robot_twist, scan.stamp);
             if self
                 .room
@@ -1051,7 +1127,6 @@ impl Perception {
             );
             if let Some(pose) = placed {
                 let echoes: Vec<Point2<f64>> = pts.points().iter().map(|q| q.p).collect();
-                let walls = own_walls(&est, self.wall_band_m);
                 let sensor = pose * self.mount;
                 self.echoes
                     .scan(&pose, &sensor, scan, &echoes, |p| walls.place(p), &moving);
@@ -1574,6 +1649,29 @@ mod tests {
         pacing_not_mapped_within(60.0, [3.05, 1.0], [3.35, 1.8]);
     }
 
+    /// Someone who walks up to the robot and waits for it (four seconds
+    /// on one spot before they turn back) is not mapped where they wait:
+    /// followed since they walked, they are a mover standing. Mapped,
+    /// they were kept behind a robot that turned away from them.
+    #[test]
+    fn a_person_waiting_for_the_robot_is_not_mapped() {
+        let walker = stucco_sim::PersonSpec {
+            path: vec![[4.4, 1.0], [2.0, 1.0]],
+            speed_mps: 1.0,
+        };
+        let (with, without) = (
+            floor_seen_with(vec![walker], 5.0),
+            floor_seen_with(Vec::new(), 5.0),
+        );
+        let near = |o: &&Obstacle| {
+            o.min_m[0] < 3.2 && o.max_m[0] > 2.6 && o.min_m[1] < 1.4 && o.max_m[1] > 0.6
+        };
+        assert!(
+            with.iter().filter(near).count() <= without.iter().filter(near).count(),
+            "mapped the person: {with:?} (without them: {without:?})"
+        );
+    }
+
     /// A room kept in its drawing's polygon maps what stands on its floor
     /// as one kept as a rectangle does. The pieces were stretched to the
     /// walls by the filter's state past the pose taken for the room's
@@ -1634,14 +1732,15 @@ mod tests {
     }
 
     /// Where a person pacing turns back (half a second on one spot, their
-    /// echoes still) they are mapped, and cleared again by the beams that
-    /// pass there once they walk on: a minute and a half leg later, with
-    /// them in the middle of their walk, nothing is mapped from one end
-    /// of it to the other that is not mapped without them.
+    /// echoes still) they are not mapped: followed since they walked,
+    /// they are a mover standing too. After twenty legs, with them at a
+    /// turning point and in the middle of the next leg, nothing is mapped
+    /// from one end of their walk to the other that is not mapped without
+    /// them.
     #[test]
-    fn where_a_person_turned_back_is_cleared_once_they_walk_on() {
-        // 20 legs of 3 s and half the next: in the middle, walking; their
-        // whole walk, both turning points, clear.
+    fn where_a_person_pacing_turns_back_is_not_mapped() {
+        // 20 legs of 3 s: at the end of one; then half the next.
+        pacing_not_mapped_within(60.0, [3.0, 0.3], [3.4, 2.5]);
         pacing_not_mapped_within(61.5, [3.0, 0.3], [3.4, 2.5]);
     }
 
@@ -1931,6 +2030,59 @@ mod tests {
             at(0.5),
             at(0.95)
         );
+    }
+
+    /// A jog backwards into someone standing behind the robot, where the
+    /// laser never looked: the bumper touches them once, and the robot is
+    /// then held from backing on into them, not let go to push again when
+    /// the bumper's hold is over.
+    #[test]
+    #[allow(clippy::expect_used)]
+    fn a_robot_backing_into_someone_it_never_saw_touches_them_once() {
+        let behind = |start: &Pose2| {
+            let p = start.transform_point(&Point2::new(-0.7, 0.0));
+            stucco_sim::PersonSpec {
+                path: vec![[p.x, p.y], [p.x + 1e-3, p.y]],
+                speed_mps: 1e-3,
+            }
+        };
+        let (mut robot, _) = at_the_apartments_start_with(3, |w| {
+            let at = Pose2::new(
+                w.robot.at[0],
+                w.robot.at[1],
+                w.robot.heading_deg.to_radians(),
+            );
+            w.people = vec![behind(&at)];
+        });
+        let (mut touches, mut touching, mut first) = (0, false, None);
+        for k in 0..((crate::echoes::MOVING_KEEP_S - 1.0) / DT_S) as usize + 200 {
+            if k % 10 == 0 {
+                let now = robot.now();
+                let jog = stucco_core::Telecommand {
+                    id: format!("jog-{k}"),
+                    operator: "ann".to_owned(),
+                    issued: now,
+                    deadline: now.offset_secs(1.0),
+                    command: stucco_core::Command::Jog {
+                        speed_mps: -0.2,
+                        steer_rad: 0.0,
+                        ttl_s: 0.5,
+                    },
+                };
+                robot.telecommands(&[jog]);
+            }
+            robot.tick(&[], false, &mut []).expect("no sink");
+            robot.act(&mut []).expect("no sink");
+            let bumper = robot.platform().truth().bumper;
+            if bumper && !touching {
+                touches += 1;
+                first.get_or_insert(k);
+            }
+            touching = bumper;
+        }
+        let first = first.expect("the robot backed into the person");
+        assert!(first < 200, "first touch after {first} periods");
+        assert_eq!(touches, 1, "pushed again");
     }
 
     /// A robot that turned its back on what it saw, jogged backwards, stops

@@ -224,6 +224,9 @@ impl<P: Platform> Robot<P> {
         let readings = self.platform.advance(DT_S)?;
         self.perception.take(&readings, self.platform.now());
         self.bumper = readings.bumper;
+        if readings.bumper && cmd.speed_mps != 0.0 {
+            self.perception.touched(cmd.speed_mps > 0.0);
+        }
         (self.estimate, self.pose_covariance) = self.perception.mission_estimate_with_covariance();
         self.periods += 1;
         for s in sinks.iter_mut() {

@@ -166,8 +166,8 @@ pub struct Executive {
     last_tick: Option<Stamp>,
     hazard: Option<Hazard>,
     lost_since: Option<Stamp>,
-    /// A touch holding the robot with nobody there: when the touches
-    /// began, and the last one.
+    /// The touches with nobody there: when they began, and the last one
+    /// (holding the robot for `clear_s`).
     touch: Option<(Stamp, Stamp)>,
     continue_asked: bool,
     /// True for the tasks of the mission file (a checkpoint keeps those),
@@ -439,8 +439,14 @@ impl Executive {
         if inputs.bumper && self.mode == MissionMode::Running {
             if self.config.unattended {
                 // Held where it is (a person walking into it, a hand on
-                // it); the task fails only when the touches go on.
-                let since = self.touch.map_or(now, |(since, _)| since);
+                // it); the task fails only when the touches go on: each
+                // within the timeout of the last (the hold lets go between
+                // them) counts from the first.
+                let timeout = self.config.safety.touch_timeout_s;
+                let since = match self.touch {
+                    Some((since, last)) if now.seconds_since(last) <= timeout => since,
+                    _ => now,
+                };
                 self.touch = Some((since, now));
                 self.note_hazard(now, Some(Hazard::Touch));
                 if now.seconds_since(since) > self.config.safety.touch_timeout_s {
@@ -529,7 +535,6 @@ impl Executive {
             self.note_hazard(now, Some(Hazard::Touch));
             return true;
         }
-        self.touch = None;
         false
     }
 
