@@ -19,10 +19,9 @@
 //! seen of things that stand: a beam grazing a table's leg or a face at
 //! a slant passes where the last scan's echo was, and the piece of a
 //! radiator's face the laser sees slides along it as the robot turns.
-//! It stays a mover while it is
-//! followed, standing or walking, until it has stood still for
-//! [`REST_S`]: someone standing that long is in the way like furniture,
-//! and is mapped so ways are planned round them.
+//! It stays a mover while it is followed, standing or walking, until it
+//! has stood still for [`REST_S`]: someone standing that long is in the
+//! way like furniture, and is mapped so ways are planned round them.
 //!
 //! A blob lost from view for [`LOST_S`] is forgotten: a person out of
 //! view is where the echo memory's short keep of a mover's echoes puts
