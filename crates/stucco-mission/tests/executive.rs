@@ -1629,27 +1629,29 @@ fn plastering_alone() -> (Executive, Robot) {
 const HOLDING: [Point2<f64>; 2] = [Point2::new(0.85, 0.0), Point2::new(-0.25, 0.0)];
 
 /// A position the estimate keeps known only to 1.5 cm (the spray needs
-/// 1 cm): the robot gets to its first station, holds the spray there as
-/// long as the supervisor waits for a lost estimate, and then the task
-/// fails saying why, never having sprayed, instead of standing there for
-/// ever.
+/// 1 cm) everywhere: the robot holds the spray at each station as long as
+/// the supervisor waits for a lost estimate, puts the station last once
+/// (from the others the walls that hold the position may show), and at
+/// the last the task fails saying why, never having sprayed, instead of
+/// standing there for ever.
 #[test]
 fn a_station_held_for_a_loose_position_fails_the_task_after_the_timeout() {
     let timeout_s = SafetyConfig::default().lost_timeout_s;
     let (mut exec, mut robot) = plastering_alone();
     robot.position_sigma = 0.015;
     let (mut sprayed, mut t, mut started) = (false, 0.0, None);
-    for _ in 0..(900.0 / DT) as usize {
+    let mut events = Vec::new();
+    for _ in 0..(3600.0 / DT) as usize {
         let out = ask(&mut exec, &robot, Seen::default());
         sprayed |= out.tool.spray;
-        if started.is_none()
-            && out
-                .events
-                .iter()
-                .any(|e| matches!(e.kind, EventKind::StationStarted { .. }))
+        if out
+            .events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::StationStarted { .. }))
         {
             started = Some(t);
         }
+        events.extend(out.events);
         robot.drive(out.drive);
         t += DT;
         if exec.mode().is_final() {
@@ -1664,13 +1666,65 @@ fn a_station_held_for_a_loose_position_fails_the_task_after_the_timeout() {
         reason.contains("known to 15.0 mm") && reason.contains("needs 10.0 mm"),
         "{reason}"
     );
-    // It waited the timeout at the station, and not much longer (the
+    let k = kinds(&events);
+    let stations = events
+        .iter()
+        .find_map(|e| match e.kind {
+            EventKind::PlanMade { stations, .. } => Some(stations),
+            _ => None,
+        })
+        .expect("a plan made");
+    // Each station put last once, none twice.
+    let deferred = k.iter().filter(|k| *k == "station_deferred").count();
+    assert_eq!(deferred, stations, "{k:?}");
+    // At the last station it waited the timeout, and not much longer (the
     // nozzle's travel to its first point).
     let waited = t - started.expect("never got to a station");
     assert!(
         waited > timeout_s && waited < timeout_s + 10.0,
         "{waited} s"
     );
+}
+
+/// The position too loose to spray at the first station (its walls
+/// hidden from there by someone standing) until it is put last: the
+/// station, not begun, is put last after the timeout and the job goes
+/// on; plastered at the end, the job is done, each pass sprayed once.
+#[test]
+fn a_station_where_the_position_stays_loose_is_put_last_and_done_at_the_end() {
+    let (mut exec, mut robot) = plastering_alone();
+    let (mut events, mut at_first, mut plan) = (Vec::<Event>::new(), false, None);
+    for _ in 0..(6000.0 / DT) as usize {
+        let deferred = events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::StationDeferred { .. }));
+        robot.position_sigma = if at_first && !deferred { 0.015 } else { 0.003 };
+        let out = ask(&mut exec, &robot, Seen::default());
+        at_first |= out
+            .events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::StationStarted { .. }));
+        plan = plan.or_else(|| exec.plaster_plan().cloned());
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(*exec.mode(), MissionMode::Done, "{:?}", kinds(&events));
+    let k = kinds(&events);
+    assert_eq!(
+        k.iter().filter(|k| *k == "station_deferred").count(),
+        1,
+        "{k:?}"
+    );
+    assert!(!k.iter().any(|k| k == "station_given_up"), "{k:?}");
+    let plan = plan.expect("a plan");
+    let passes: usize = plan.stations.iter().map(|s| s.passes.len()).sum();
+    assert_eq!(k.iter().filter(|k| *k == "pass_done").count(), passes);
+    // The first station started twice: put last, and at the end.
+    let started = k.iter().filter(|k| *k == "station_started").count();
+    assert_eq!(started, plan.stations.len() + 1);
 }
 
 /// Held on the last stretch onto a station it already stands on within

@@ -402,6 +402,27 @@ impl Task for Plaster {
                 } else {
                     0.0
                 };
+                // A station not begun yet is put last, once: seen from
+                // the others the walls that hold the position may show
+                // (a person pacing a corridor hid both its end walls
+                // from station 0, and the job failed there undone).
+                let begun = run.cursor.pass > 0 || run.cursor.step > 0 || in_move_s > 0.0;
+                if run.held_s > config.safety.lost_timeout_s && !begun {
+                    let station = run.cursor.station;
+                    if run.defer_station() {
+                        run.held_s = 0.0;
+                        cx.emit(EventKind::StationDeferred {
+                            task: index,
+                            station,
+                        });
+                        cx.effects.checkpoint = true;
+                        cx.effects.tool = park;
+                        self.ways
+                            .replace(next_station_way(config, clearance, run, &est.pose, speed));
+                        run.phase = Phase::Moving;
+                        return TaskStep::Drive(DriveCommand::STOP);
+                    }
+                }
                 if run.held_s > config.safety.lost_timeout_s {
                     return TaskStep::Failed(TaskFailure::PositionTooLoose {
                         station: run.cursor.station,
