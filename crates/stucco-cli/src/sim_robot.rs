@@ -7,12 +7,12 @@ use crate::plastering::{WORLD_FILE, WorldState};
 use anyhow::{Context, Result};
 use nalgebra::DVector;
 use std::path::{Path, PathBuf};
-use stucco_control::{GainSchedule, Limiter};
+use stucco_control::Limiter;
 use stucco_core::{
     DriveCommand, Platform, PlatformError, Pose2, Readings, RobotSpec, Stamp, ToolCommand,
 };
 use stucco_link::ZenohPlatform;
-use stucco_mission::{Executive, ExecutiveConfig, SafetyConfig};
+use stucco_mission::{Executive, ExecutiveConfig};
 use stucco_mission::{Inputs, Outputs};
 use stucco_nav::RoomState;
 use stucco_runtime::{BadInput, Mission, Perception, Robot, Sink, SinkError};
@@ -205,18 +205,7 @@ impl LawDriven {
         size_sigma_m: [f64; 2],
     ) -> Result<Self> {
         let spec = robot_spec();
-        let idle = Executive::new(
-            ExecutiveConfig {
-                vehicle: spec.vehicle.clone(),
-                gains: GainSchedule::default(),
-                safety: SafetyConfig::default(),
-                unattended: true,
-                spray: None,
-                floor: None,
-                body_camera_azimuth_rad: None,
-            },
-            Vec::new(),
-        );
+        let idle = Executive::new(ExecutiveConfig::driving(spec.vehicle.clone()), Vec::new());
         Ok(LawDriven {
             robot: robot_on(
                 Simulator::new(world, SimConfig::default(), Some(seed)),

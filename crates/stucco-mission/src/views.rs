@@ -321,8 +321,6 @@ const HEADING_STEP_RAD: f64 = std::f64::consts::PI / 6.0;
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::supervisor::SafetyConfig;
-    use stucco_control::GainSchedule;
     use stucco_core::{Stamp, VehicleSpec};
 
     fn room(corners: &[[f64; 2]], obstacles: Vec<Obstacle>, pose: Pose2) -> Estimate {
@@ -347,15 +345,7 @@ mod tests {
     }
 
     fn config() -> ExecutiveConfig {
-        ExecutiveConfig {
-            vehicle: VehicleSpec::default(),
-            gains: GainSchedule::default(),
-            safety: SafetyConfig::default(),
-            unattended: true,
-            spray: None,
-            floor: None,
-            body_camera_azimuth_rad: None,
-        }
+        ExecutiveConfig::driving(VehicleSpec::default())
     }
 
     const L: [[f64; 2]; 6] = [

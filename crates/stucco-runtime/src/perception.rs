@@ -1772,15 +1772,7 @@ mod tests {
     /// A robot on `sim` with `perception` whose executive idles.
     fn idle_robot(sim: Simulator, perception: Perception, spec: &RobotSpec) -> Robot<Simulator> {
         let idle = stucco_mission::Executive::new(
-            stucco_mission::ExecutiveConfig {
-                vehicle: spec.vehicle.clone(),
-                gains: stucco_control::GainSchedule::default(),
-                safety: stucco_mission::SafetyConfig::default(),
-                unattended: true,
-                spray: None,
-                floor: None,
-                body_camera_azimuth_rad: None,
-            },
+            stucco_mission::ExecutiveConfig::driving(spec.vehicle.clone()),
             Vec::new(),
         );
         let limiter = stucco_control::Limiter::new(&spec.vehicle);

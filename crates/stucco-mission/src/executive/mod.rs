@@ -116,6 +116,22 @@ pub struct ExecutiveConfig {
     pub body_camera_azimuth_rad: Option<f64>,
 }
 
+impl ExecutiveConfig {
+    /// `vehicle` that only drives, unattended: the default gains and
+    /// safety, no spray tool, no building, no camera on its body.
+    pub fn driving(vehicle: VehicleSpec) -> Self {
+        ExecutiveConfig {
+            vehicle,
+            gains: GainSchedule::default(),
+            safety: SafetyConfig::default(),
+            unattended: true,
+            spray: None,
+            floor: None,
+            body_camera_azimuth_rad: None,
+        }
+    }
+}
+
 /// The mission's progress as a checkpoint keeps it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
