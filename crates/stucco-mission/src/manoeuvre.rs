@@ -48,6 +48,8 @@ const RUN_STEP_M: f64 = 0.02;
 /// Turns and runs the search tries, deg and m (each either way).
 const TURNS_DEG: [f64; 6] = [5.0, 10.0, 20.0, 30.0, 45.0, 90.0];
 const RUNS_M: [f64; 7] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2];
+/// Rate a turn on the spot is reckoned at, rad/s.
+pub(crate) const TURN_RADPS: f64 = 0.5;
 /// Poses the search may expand before it gives up.
 const BUDGET: usize = 100_000;
 /// How much the search's estimate of the time still to go is inflated.
@@ -205,7 +207,7 @@ impl<'a> Space<'a> {
             run_field_m: field + PLAN_MARGIN_M,
             turn_field_rad: (field + PLAN_MARGIN_M) / vehicle.wheelbase_m,
             speed_mps: speed_mps.max(0.05),
-            turn_radps: 0.5,
+            turn_radps: TURN_RADPS,
             turn_overhead_s: 2.0 * (vehicle.max_steer_rad / vehicle.max_steer_rate_radps + 0.1),
         }
     }

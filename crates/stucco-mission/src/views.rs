@@ -56,9 +56,6 @@ const PLACES_TRIED: usize = 12;
 /// Of them, those whose ways are searched for before the walls are given
 /// up as out of reach for now (a search that finds none spends seconds).
 const WAYS_TRIED: usize = 2;
-/// Rate the robot turns on its spot, for the time to face a place's
-/// walls, rad/s.
-const TURN_RADPS: f64 = 0.5;
 
 /// The room's walls as the laser meets them: each wall's line, and what
 /// may stand in a beam's way.
@@ -237,7 +234,7 @@ pub(crate) fn next_view(
                 .map(|(h, walls)| (pose_at(&c, h), walls))
                 .find(|(goal, _)| space.pose_clear(goal))?;
             let turn = wrap_angle(goal.theta - here.theta).abs();
-            let time = DWELL_S + metres / speed_mps.max(0.05) + turn / TURN_RADPS;
+            let time = DWELL_S + metres / speed_mps.max(0.05) + turn / crate::manoeuvre::TURN_RADPS;
             Some((walls.len() as f64 / time, c, goal, walls))
         })
         .collect();

@@ -1628,6 +1628,31 @@ fn plastering_alone() -> (Executive, Robot) {
 /// run along its heading holds, even creeping (robot frame).
 const HOLDING: [Point2<f64>; 2] = [Point2::new(0.85, 0.0), Point2::new(-0.25, 0.0)];
 
+/// The stations of the first plan the events tell of.
+fn planned_stations(events: &[Event]) -> usize {
+    events
+        .iter()
+        .find_map(|e| match e.kind {
+            EventKind::PlanMade { stations, .. } => Some(stations),
+            _ => None,
+        })
+        .expect("a plan made")
+}
+
+/// Asserts the job done with one station put last and none given up;
+/// the events' kinds.
+fn done_with_one_station_put_last(exec: &Executive, events: &[Event]) -> Vec<String> {
+    assert_eq!(*exec.mode(), MissionMode::Done, "{:?}", kinds(events));
+    let k = kinds(events);
+    assert_eq!(
+        k.iter().filter(|k| *k == "station_deferred").count(),
+        1,
+        "{k:?}"
+    );
+    assert!(!k.iter().any(|k| k == "station_given_up"), "{k:?}");
+    k
+}
+
 /// A position the estimate keeps known only to 1.5 cm (the spray needs
 /// 1 cm) everywhere: the robot holds the spray at each station as long as
 /// the supervisor waits for a lost estimate, puts the station last once
@@ -1667,13 +1692,7 @@ fn a_station_held_for_a_loose_position_fails_the_task_after_the_timeout() {
         "{reason}"
     );
     let k = kinds(&events);
-    let stations = events
-        .iter()
-        .find_map(|e| match e.kind {
-            EventKind::PlanMade { stations, .. } => Some(stations),
-            _ => None,
-        })
-        .expect("a plan made");
+    let stations = planned_stations(&events);
     // Each station put last once, none twice.
     let deferred = k.iter().filter(|k| *k == "station_deferred").count();
     assert_eq!(deferred, stations, "{k:?}");
@@ -1711,14 +1730,7 @@ fn a_station_where_the_position_stays_loose_is_put_last_and_done_at_the_end() {
             break;
         }
     }
-    assert_eq!(*exec.mode(), MissionMode::Done, "{:?}", kinds(&events));
-    let k = kinds(&events);
-    assert_eq!(
-        k.iter().filter(|k| *k == "station_deferred").count(),
-        1,
-        "{k:?}"
-    );
-    assert!(!k.iter().any(|k| k == "station_given_up"), "{k:?}");
+    let k = done_with_one_station_put_last(&exec, &events);
     let plan = plan.expect("a plan");
     let passes: usize = plan.stations.iter().map(|s| s.passes.len()).sum();
     assert_eq!(k.iter().filter(|k| *k == "pass_done").count(), passes);
@@ -1805,21 +1817,8 @@ fn a_station_whose_way_stays_blocked_is_put_last_and_done_at_the_end() {
             break;
         }
     }
-    assert_eq!(*exec.mode(), MissionMode::Done, "{:?}", kinds(&events));
-    let k = kinds(&events);
-    assert_eq!(
-        k.iter().filter(|k| *k == "station_deferred").count(),
-        1,
-        "{k:?}"
-    );
-    assert!(!k.iter().any(|k| k == "station_given_up"), "{k:?}");
-    let stations = events
-        .iter()
-        .find_map(|e| match e.kind {
-            EventKind::PlanMade { stations, .. } => Some(stations),
-            _ => None,
-        })
-        .expect("a plan made");
+    let k = done_with_one_station_put_last(&exec, &events);
+    let stations = planned_stations(&events);
     let started = k.iter().filter(|k| *k == "station_started").count();
     assert_eq!(started, stations);
 }

@@ -161,9 +161,11 @@ fn own_walls(est: &Estimate, band_m: f64) -> OwnWalls {
 }
 
 /// Where an echo is of something standing on the room's floor: inside
-/// the room, off its walls by a band widened by the estimate's σ. None
-/// while the robot does not know where it is (echoes placed from a lost
-/// estimate would smear walls into the room).
+/// the room, off its walls by a band widened by the estimate's σ (in a
+/// room just entered, its size the drawing's, what stands in the middle
+/// is mapped at once, before the robot drives into it). None while the
+/// robot does not know where it is (echoes placed from a lost estimate
+/// would smear walls into the room).
 struct OnFloor<'a> {
     outline: Option<stucco_plan::Outline<'a>>,
     room_m: [f64; 2],
@@ -645,28 +647,20 @@ impl Perception {
     }
 
     /// Takes the scan into the floor map: each beam lowers the cells it
-    /// passed, each echo inside the room, off its walls, raises its own.
-    /// `moving` tells each of `pts` that is of something moving (a
-    /// person walking): no furniture, its beam only clears. One who
-    /// stands still for more than the scans kept (half a second) is
+    /// passed, each echo `on_floor` holds raises its own. `moving` tells
+    /// each of `pts` that is of something moving (a person walking, or
+    /// one followed since they walked): no furniture, its beam only
+    /// clears. A mover who stands for [`crate::movers::REST_S`] is
     /// mapped, and cleared by the beams that pass once they walk on.
     fn note_floor(
         &mut self,
         est: &Estimate,
+        on_floor: &OnFloor,
         pts: &ScanPoints,
         moving: &[bool],
         twist: &stucco_core::Twist2,
         stamp: Stamp,
     ) {
-        // Only while the robot knows where it is: echoes placed from a
-        // lost estimate would smear walls into the room. The band taken
-        // for the walls widens by the estimate's σ: in a room just
-        // entered, its size the drawing's, what stands in the middle is
-        // mapped at once, before the loop that measures the room drives
-        // into it.
-        let Some(on_floor) = OnFloor::of(est) else {
-            return;
-        };
         // The echoes are placed from the pose the scan was taken at (its
         // first beam), the estimate's pose moved back by the motion since.
         let back = est.stamp.seconds_since(stamp).max(0.0);
@@ -1088,6 +1082,7 @@ impl Perception {
             let placed = (at == scan.stamp).then(|| Pose2::new(x[0], x[1], x[2]));
             let est = self.mission_estimate();
             let walls = own_walls(&est, self.wall_band_m);
+            let on_floor = OnFloor::of(&est);
             let moving: Vec<bool> = match placed {
                 Some(pose) => {
                     let sensor = pose * self.mount;
@@ -1100,7 +1095,6 @@ impl Perception {
                         seen.iter().map(|p| self.recent.saw_through(p)).collect();
                     // Only what stands on the floor is followed: what is
                     // seen through a doorway slides as the view turns.
-                    let on_floor = OnFloor::of(&est);
                     let standing: Vec<bool> = seen
                         .iter()
                         .map(|p| on_floor.as_ref().is_some_and(|f| f.holds(p)))
@@ -1109,7 +1103,9 @@ impl Perception {
                 }
                 None => vec![false; pts.points().len()],
             };
-            self.note_floor(&est, &pts, &moving, &robot_twist, scan.stamp);
+            if let Some(on_floor) = &on_floor {
+                self.note_floor(&est, on_floor, &pts, &moving, &robot_twist, scan.stamp);
+            }
             if self
                 .room
                 .floor_groups
@@ -2024,6 +2020,22 @@ mod tests {
         );
     }
 
+    /// The operator's `k`th jog backwards at 0.2 m/s for half a second.
+    fn backing_jog(robot: &Robot<Simulator>, k: usize) -> stucco_core::Telecommand {
+        let now = robot.now();
+        stucco_core::Telecommand {
+            id: format!("jog-{k}"),
+            operator: "ann".to_owned(),
+            issued: now,
+            deadline: now.offset_secs(1.0),
+            command: stucco_core::Command::Jog {
+                speed_mps: -0.2,
+                steer_rad: 0.0,
+                ttl_s: 0.5,
+            },
+        }
+    }
+
     /// A jog backwards into someone standing behind the robot, where the
     /// laser never looked: the bumper touches them once, and the robot is
     /// then held from backing on into them, not let go to push again when
@@ -2049,18 +2061,7 @@ mod tests {
         let (mut touches, mut touching, mut first) = (0, false, None);
         for k in 0..((crate::echoes::MOVING_KEEP_S - 1.0) / DT_S) as usize + 200 {
             if k % 10 == 0 {
-                let now = robot.now();
-                let jog = stucco_core::Telecommand {
-                    id: format!("jog-{k}"),
-                    operator: "ann".to_owned(),
-                    issued: now,
-                    deadline: now.offset_secs(1.0),
-                    command: stucco_core::Command::Jog {
-                        speed_mps: -0.2,
-                        steer_rad: 0.0,
-                        ttl_s: 0.5,
-                    },
-                };
+                let jog = backing_jog(&robot, k);
                 robot.telecommands(&[jog]);
             }
             robot.tick(&[], false, &mut []).expect("no sink");
@@ -2099,18 +2100,7 @@ mod tests {
             let from = robot.platform().truth().drive.pose;
             for k in 0..1500 {
                 if k % 10 == 0 {
-                    let now = robot.now();
-                    let jog = stucco_core::Telecommand {
-                        id: format!("jog-{k}"),
-                        operator: "ann".to_owned(),
-                        issued: now,
-                        deadline: now.offset_secs(1.0),
-                        command: stucco_core::Command::Jog {
-                            speed_mps: -0.2,
-                            steer_rad: 0.0,
-                            ttl_s: 0.5,
-                        },
-                    };
+                    let jog = backing_jog(&robot, k);
                     let id = jog.id.clone();
                     let acks = robot.telecommands(&[jog]);
                     assert!(
