@@ -3498,3 +3498,46 @@ fn a_planned_move_backwards_stops_for_what_is_behind() {
     }
     assert!(backed, "{:?}", exec.current_behaviour());
 }
+
+/// Plastering the hall's east end wall and its north wall: the robot is
+/// held turning toward the end wall's station, which it cannot face, and
+/// that station is given up where the field holds it. It runs out of
+/// there before the way on is planned: from where it was held, no way to
+/// any station was found clear, and every station of the north wall was
+/// given up in turn (the task failed with nothing plastered).
+#[test]
+fn a_robot_held_turning_toward_a_station_given_up_runs_out_before_the_next() {
+    let mut task = plaster(false);
+    if let TaskSpec::Plaster { walls, ceiling, .. } = &mut task {
+        *walls = Some(vec![WallName::EAST, WallName::NORTH]);
+        *ceiling = false;
+    }
+    let (_, mut robot, mut exec) = in_the_hall(task);
+    let walls = hall_walls();
+    let (mut given_up, mut first) = (Vec::new(), None);
+    for _ in 0..(3000.0 / DT) as usize {
+        let seen = within_3_m(&robot, &walls);
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        first = first.or_else(|| exec.plaster_plan().cloned());
+        given_up.extend(out.events.iter().filter_map(|e| match e.kind {
+            EventKind::StationGivenUp { station, .. } => Some(station),
+            _ => None,
+        }));
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    let first = first.expect("a plan");
+    let on = |w: WallName| {
+        first
+            .stations
+            .iter()
+            .filter(|s| s.lane == stucco_plan::Lane::Wall(w))
+            .count()
+    };
+    // Only the end wall's stations are given up.
+    assert!(on(WallName::NORTH) >= 5, "{}", on(WallName::NORTH));
+    assert_eq!(given_up.len(), on(WallName::EAST), "{given_up:?}");
+}

@@ -4,7 +4,7 @@
 
 use super::survey::{Legs, SURVEY_BLOCKED_S, survey_legs, survey_way};
 use super::wall::MIN_RUN_IN_M;
-use super::ways::{estimate_space, planned_way};
+use super::ways::{estimate_space, planned_way, run_out, run_outs};
 use super::{
     Behaviours, REPLAN_AFTER_S, RUN_IN_M, Task, TaskCx, TaskFailure, TaskStep, Thaw,
     pivot_clearance,
@@ -593,7 +593,8 @@ impl Task for Plaster {
                 || blocked_s > 0.5 * config.safety.blocked_timeout_s)
         {
             let station = run.cursor.station;
-            if !run.way_unchecked && run.defer_station() {
+            let unchecked = run.way_unchecked;
+            if !unchecked && run.defer_station() {
                 cx.emit(EventKind::StationDeferred {
                     task: index,
                     station,
@@ -605,14 +606,29 @@ impl Task for Plaster {
                     unreachable_m2: lost,
                 });
             }
+            // Held on a way not found clear (turning toward a hall's end
+            // wall) where the body's margins are not kept clear, the
+            // robot runs out first: from there no way is found clear, and
+            // every station after would be given up in turn.
+            let mut way = Vec::new();
+            let mut from = est.pose;
+            let space = plaster_space(config, run, self.spec.speed_mps);
+            if unchecked
+                && !space.pose_clear(&from)
+                && let Some((d, out)) = run_outs(&space, from).next()
+            {
+                way.push(run_out(config, &from, d, self.spec.speed_mps));
+                from = out;
+            }
             let clearance = pivot_clearance(config);
-            self.ways.replace(next_station_way(
+            way.extend(next_station_way(
                 config,
                 clearance,
                 run,
-                &est.pose,
+                &from,
                 self.spec.speed_mps,
             ));
+            self.ways.replace(way);
             // None left: the task ends where the robot stands, and the
             // next task's way starts there.
             if run.finished() {

@@ -53,26 +53,41 @@ pub(crate) fn planned_way(
     if !space.pose_clear(from) {
         // Standing nearer something than the body's margins allow (seen
         // only on the way here, or a station's end squeezed against a
-        // wall): run out along the robot's own line, backing first (the
-        // way it came), then forward, as little as frees it, and go on
-        // from there.
-        let out = RUN_OUT_M.iter().flat_map(|&d| [-d, d]).find_map(|d| {
-            let out = *from * Pose2::new(d, 0.0, 0.0);
-            if !space.pose_clear(&out) {
-                return None;
-            }
+        // wall): run out, and go on from there.
+        return run_outs(&space, *from).find_map(|(d, out)| {
             let (cost, moves) = space.manoeuvre(&out, goal)?;
-            let mut way = vec![if d < 0.0 {
-                Behaviour::reverse_to(&config.gains, out, speed_mps)
-            } else {
-                Behaviour::regulate(&config.gains, out, speed_mps)
-            }];
+            let mut way = vec![run_out(config, from, d, speed_mps)];
             way.extend(manoeuvre::behaviours(&config.gains, &moves, speed_mps));
             Some((cost + 0.5 + d.abs() / speed_mps, way))
         });
-        return out;
     }
     None
+}
+
+/// The runs along the robot's own line from `from` that end where the
+/// body and its margins keep clear in `space`, least first, backing
+/// before forward (the way it came): each as the distance run (negative
+/// backing), m, and the pose it ends at.
+pub(crate) fn run_outs<'a>(
+    space: &'a Space<'_>,
+    from: Pose2,
+) -> impl Iterator<Item = (f64, Pose2)> + 'a {
+    RUN_OUT_M
+        .iter()
+        .flat_map(|&d| [-d, d])
+        .map(move |d| (d, from * Pose2::new(d, 0.0, 0.0)))
+        .filter(|(_, out)| space.pose_clear(out))
+}
+
+/// The behaviour that runs `d` along the robot's own line from `from`,
+/// m (negative backing).
+pub(crate) fn run_out(config: &ExecutiveConfig, from: &Pose2, d: f64, speed_mps: f64) -> Behaviour {
+    let out = *from * Pose2::new(d, 0.0, 0.0);
+    if d < 0.0 {
+        Behaviour::reverse_to(&config.gains, out, speed_mps)
+    } else {
+        Behaviour::regulate(&config.gains, out, speed_mps)
+    }
 }
 
 /// How far a robot standing too near something may run out along its
