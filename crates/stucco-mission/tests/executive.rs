@@ -2527,27 +2527,8 @@ fn hall_walls() -> Vec<Point2<f64>> {
 /// done.
 #[test]
 fn a_plaster_task_whose_stations_are_all_given_up_fails_saying_why() {
-    let mut task = plaster(false);
-    if let TaskSpec::Plaster { walls, ceiling, .. } = &mut task {
-        *walls = Some(vec![WallName::EAST, WallName::WEST]);
-        *ceiling = false;
-    }
-    let (_, mut robot, mut exec) = in_the_hall(task);
-    let walls = hall_walls();
-    let mut given_up = 0;
-    for _ in 0..(2000.0 / DT) as usize {
-        let seen = within_3_m(&robot, &walls);
-        let out = ask_seeing(&mut exec, &robot, &seen);
-        given_up += out
-            .events
-            .iter()
-            .filter(|e| matches!(e.kind, EventKind::StationGivenUp { .. }))
-            .count();
-        robot.drive(out.drive);
-        if exec.mode().is_final() {
-            break;
-        }
-    }
+    let (exec, given_up, _) = plaster_hall_walls(vec![WallName::EAST, WallName::WEST], 2000.0);
+    let given_up = given_up.len();
     assert!(given_up > 0);
     assert!(
         matches!(exec.mode(), MissionMode::Failed { .. }),
@@ -2565,6 +2546,41 @@ fn a_plaster_task_whose_stations_are_all_given_up_fails_saying_why() {
         }
         other => panic!("{other:?}: {:?}", exec.status()),
     }
+}
+
+/// A plaster task of only `walls` of the apartment's hall, no ceiling,
+/// run for at most `max_s` with the laser seeing the hall's walls: the
+/// executive at the end, the stations given up (as numbered when given
+/// up), and the first plan made.
+fn plaster_hall_walls(
+    walls: Vec<WallName>,
+    max_s: f64,
+) -> (Executive, Vec<usize>, Option<stucco_plan::Plan>) {
+    let mut task = plaster(false);
+    if let TaskSpec::Plaster {
+        walls: w, ceiling, ..
+    } = &mut task
+    {
+        *w = Some(walls);
+        *ceiling = false;
+    }
+    let (_, mut robot, mut exec) = in_the_hall(task);
+    let seen_walls = hall_walls();
+    let (mut given_up, mut first) = (Vec::new(), None);
+    for _ in 0..(max_s / DT) as usize {
+        let seen = within_3_m(&robot, &seen_walls);
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        first = first.or_else(|| exec.plaster_plan().cloned());
+        given_up.extend(out.events.iter().filter_map(|e| match e.kind {
+            EventKind::StationGivenUp { station, .. } => Some(station),
+            _ => None,
+        }));
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    (exec, given_up, first)
 }
 
 /// How far the body's outline keeps off the walls of its room and off
@@ -3507,27 +3523,7 @@ fn a_planned_move_backwards_stops_for_what_is_behind() {
 /// given up in turn (the task failed with nothing plastered).
 #[test]
 fn a_robot_held_turning_toward_a_station_given_up_runs_out_before_the_next() {
-    let mut task = plaster(false);
-    if let TaskSpec::Plaster { walls, ceiling, .. } = &mut task {
-        *walls = Some(vec![WallName::EAST, WallName::NORTH]);
-        *ceiling = false;
-    }
-    let (_, mut robot, mut exec) = in_the_hall(task);
-    let walls = hall_walls();
-    let (mut given_up, mut first) = (Vec::new(), None);
-    for _ in 0..(3000.0 / DT) as usize {
-        let seen = within_3_m(&robot, &walls);
-        let out = ask_seeing(&mut exec, &robot, &seen);
-        first = first.or_else(|| exec.plaster_plan().cloned());
-        given_up.extend(out.events.iter().filter_map(|e| match e.kind {
-            EventKind::StationGivenUp { station, .. } => Some(station),
-            _ => None,
-        }));
-        robot.drive(out.drive);
-        if exec.mode().is_final() {
-            break;
-        }
-    }
+    let (exec, given_up, first) = plaster_hall_walls(vec![WallName::EAST, WallName::NORTH], 3000.0);
     assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
     let first = first.expect("a plan");
     let on = |w: WallName| {
