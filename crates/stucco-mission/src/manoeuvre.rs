@@ -48,6 +48,8 @@ const RUN_STEP_M: f64 = 0.02;
 /// Turns and runs the search tries, deg and m (each either way).
 const TURNS_DEG: [f64; 6] = [5.0, 10.0, 20.0, 30.0, 45.0, 90.0];
 const RUNS_M: [f64; 7] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2];
+/// What a run's stop and start are reckoned to add to it, s.
+const RUN_OVERHEAD_S: f64 = 0.5;
 /// Rate a turn on the spot is reckoned at, rad/s.
 pub(crate) const TURN_RADPS: f64 = 0.5;
 /// Poses the search may expand before it gives up.
@@ -510,7 +512,7 @@ impl<'a> Space<'a> {
                 }
                 Move::Run { to, .. } => {
                     let q = to.position().coords;
-                    let c = 0.5 + (q - p).norm() / self.speed_mps;
+                    let c = RUN_OVERHEAD_S + (q - p).norm() / self.speed_mps;
                     p = q;
                     c
                 }
@@ -605,7 +607,7 @@ impl<'a> Space<'a> {
             )
         };
         // Nodes: pose, cost so far, the node before and the move from it,
-        // whether the move was a turn (turns and runs alternate).
+        // whether the move was a turn (a turn follows a run; a run either).
         struct Node {
             pose: Pose2,
             cost: f64,
@@ -672,22 +674,42 @@ impl<'a> Space<'a> {
                     }
                 }
             }
-            if turned != Some(false) {
-                let f = Vector2::new(pose.theta.cos(), pose.theta.sin());
-                for forward in [true, false] {
-                    let sign = if forward { 1.0 } else { -1.0 };
-                    for run in RUNS_M {
-                        let q = p + f * (sign * run);
-                        if !self.run_clear(&p, &q, pose.theta) {
-                            break;
-                        }
-                        let to = Pose2::new(q.x, q.y, pose.theta);
-                        next.push((Move::Run { to, forward }, to, false));
+            // Runs after a turn; after a run, the longest (a corridor
+            // longer than it is driven straight down in one run, not
+            // zigzagged in turns of 5°).
+            let runs = if turned == Some(false) {
+                &RUNS_M[RUNS_M.len() - 1..]
+            } else {
+                &RUNS_M[..]
+            };
+            let f = Vector2::new(pose.theta.cos(), pose.theta.sin());
+            for forward in [true, false] {
+                let sign = if forward { 1.0 } else { -1.0 };
+                for run in runs {
+                    let q = p + f * (sign * run);
+                    if !self.run_clear(&p, &q, pose.theta) {
+                        break;
                     }
+                    let to = Pose2::new(q.x, q.y, pose.theta);
+                    next.push((Move::Run { to, forward }, to, false));
                 }
             }
             for (m, to, is_turn) in next {
-                let c = cost + self.cost(&pose, &[m]);
+                let mut c = cost + self.cost(&pose, &[m]);
+                if let (
+                    Some((
+                        _,
+                        Move::Run {
+                            forward: before, ..
+                        },
+                    )),
+                    Move::Run { forward, .. },
+                ) = (nodes[k].parent, m)
+                    && before == forward
+                {
+                    // Not a stop and a start: the run before goes on.
+                    c -= RUN_OVERHEAD_S;
+                }
                 let kk = key(&to, is_turn);
                 if best.get(&kk).is_some_and(|b| *b <= c) {
                     continue;
@@ -791,8 +813,10 @@ mod tests {
                     let ahead =
                         Vector2::new(theta.cos(), theta.sin()).dot(&(to.position().coords - p));
                     assert_eq!(ahead > 0.0, forward, "a run's direction");
+                    // (A turn smaller than the goal's tolerance is not
+                    // made.)
                     assert!(
-                        wrap_angle(to.theta - theta).abs() < 1e-9,
+                        wrap_angle(to.theta - theta).abs() <= AT_GOAL_RAD,
                         "a run keeps its heading"
                     );
                     p = to.position().coords;
@@ -839,6 +863,54 @@ mod tests {
             );
             let (_, moves) = found.expect("a way");
             assert_way_clear(&space, &from, &moves, &goal);
+        }
+    }
+
+    #[test]
+    fn a_corridor_longer_than_the_longest_run_is_driven_straight_down() {
+        // Generated building 12's corridor, 15.46 × 1.2 m: the robot has
+        // plastered its east end and faces it. The way on is through a
+        // door in the north wall near the west end, from just inside it
+        // facing out. Nowhere in the corridor can the robot turn round: it
+        // backs straight down it and turns into the door there. Runs
+        // could not follow runs, and the search zigzagged down the
+        // corridor in 3.2 m runs and turns of 5°, its body swung within
+        // centimetres of the walls at every turn.
+        let v = VehicleSpec::default();
+        let door = |wall, position_m, width_m| DoorEstimate {
+            wall,
+            position_m,
+            width_m: Some(width_m),
+            sigma_m: 0.002,
+            plan_door: None,
+        };
+        let doors = [
+            door(WallName::NORTH, 2.457, 0.974),
+            door(WallName::SOUTH, 10.815, 0.738),
+            door(WallName::NORTH, 7.491, 0.797),
+        ];
+        let space = Space::new(
+            [15.46, 1.203],
+            &[],
+            &doors,
+            &[],
+            &v,
+            &SafetyConfig::default(),
+            0.3,
+        );
+        let from = Pose2::new(13.54, 0.508, 0.0);
+        let goal = Pose2::new(2.457, 0.353, FRAC_PI_2);
+        let (_, moves) = space.manoeuvre(&from, &goal).expect("a way to the door");
+        assert_way_clear(&space, &from, &moves, &goal);
+        // Every run of more than a metre is along the corridor.
+        let mut at = from;
+        for m in &moves {
+            if let Move::Run { to, .. } = *m {
+                if (to.position() - at.position()).norm() > 1.0 {
+                    assert!(to.theta.sin().abs() < 1e-6, "{moves:?}");
+                }
+                at = to;
+            }
         }
     }
 

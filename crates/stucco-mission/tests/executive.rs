@@ -2373,6 +2373,40 @@ fn the_robot_turns_in_a_hall_too_narrow_to_turn_on_the_spot_in() {
     assert!(closest >= 0.01, "{closest}");
 }
 
+/// With the default protective field (15 cm past each move's end), a
+/// robot standing across the 1.2 m hall as deep as a door's approach
+/// asks has its trailing end and the field behind it on the far wall: no
+/// way reaches that approach. It turns into the door nearer it, without
+/// touching a wall (the way was driven unchecked, through the walls).
+#[test]
+fn a_door_out_of_a_narrow_hall_is_approached_where_the_robot_can_turn_into_it() {
+    let plan = apartment();
+    // At the hall's east end, facing it.
+    let mut robot = Robot::at(Pose2::new(7.2, 0.6, 0.0));
+    robot.in_room(&plan, 2);
+    let mut cfg = config(true);
+    cfg.floor = Some(plan.clone());
+    let mut exec = Executive::new(cfg, vec![go_to("living")]);
+    let mut doors = Vec::new();
+    let mut closest = f64::INFINITY;
+    for _ in 0..(600.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        if let Some(door) = out.enter_room {
+            doors.push(door);
+            robot.through(&plan, door);
+        }
+        robot.drive(out.drive);
+        closest = closest.min(body_inside(&robot, &plan));
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
+    assert_eq!(doors, [0]);
+    assert_eq!(robot.room, Some(0));
+    assert!(closest >= 0.01, "{closest}");
+}
+
 #[test]
 fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_walls() {
     // The apartment's hall, 8 × 1.2 m: the long walls' stations are turned

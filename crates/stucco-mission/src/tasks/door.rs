@@ -23,6 +23,9 @@ const BACKED_LASER_BEYOND_M: f64 = 0.5;
 /// beyond it, m (the apartment's missions set the protective field's
 /// margin to 3 cm; a mission with a longer field may be stopped there).
 const DOOR_FIT_M: f64 = 0.1;
+/// How much nearer a door its approach is taken at a time where no clear
+/// way reaches it, m.
+const APPROACH_STEP_M: f64 = 0.1;
 /// A body whose trailing end is this far past the far face of a door's
 /// wall is through the door, m.
 const THROUGH_M: f64 = 0.05;
@@ -346,10 +349,15 @@ impl Doorway {
 
 /// The behaviours through door `d` of the room `est` knows: onto the line
 /// through its middle `approach` before it, facing out, then along the
-/// line to `beyond` past it. Standing on that line facing into the room
-/// (just come in through the door), the robot may back out instead, when
-/// that is quicker than turning round (a bedroom cramped by its door).
-/// Both distances
+/// line to `beyond` past it. Where no clear way reaches that approach (a
+/// corridor too narrow to turn in: standing across it that deep, the
+/// robot's trailing end and the field behind it reach the far wall, so
+/// the turn into the door must be made nearer the door), the approach is
+/// taken nearer, [`APPROACH_STEP_M`] at a time, down to the body's
+/// leading end at the wall's line. Standing on that line facing into the
+/// room (just come in through the door), the robot may back out instead,
+/// when that is quicker than turning round (a bedroom cramped by its
+/// door). Both distances
 /// are fitted to the rooms: at the approach the body must be in this
 /// room, and beyond, in the next, whose depth across the door is
 /// `next_depth_m` when the plan gives it.
@@ -372,7 +380,7 @@ fn door_pass(
     // needs no approach from further in than where it stands.
     let here = est.pose.position().coords;
     let (off_line, standing) = (g.position(&here) - d.position_m, g.distance(&here));
-    let pass = |forward: bool| {
+    let pass = |forward: bool, nearer_m: f64| {
         // The end of the body that leads and the one that trails.
         let (leads, trails) = if forward {
             (front, rear)
@@ -391,6 +399,7 @@ fn door_pass(
         if on_line {
             approach = approach.min(standing);
         }
+        let approach = (approach - nearer_m).max(leads);
         // Backing, the laser trails: the robot stops with it through the
         // wall and past the laser's shortest range, so that the next
         // room's filter starts on that room's walls, not on the room
@@ -421,22 +430,28 @@ fn door_pass(
     // Facing out, or backing out the way it came in when it stands on the
     // door's line facing into the room (the laser looks ahead: the robot
     // backs only where it has just driven), whichever is the quicker.
-    let best = [true, false]
-        .into_iter()
-        .filter_map(|forward| {
-            let (on_line, a, b) = pass(forward);
-            if !forward && !on_line {
-                return None;
-            }
-            let (cost, way) = planned_way(config, est, &est.pose, &a, speed_mps)?;
-            Some((cost, forward, way, b))
-        })
-        .min_by(|x, y| x.0.total_cmp(&y.0));
-    if let Some((_, forward, mut out, b)) = best {
+    let best = |nearer_m: f64| {
+        [true, false]
+            .into_iter()
+            .filter_map(|forward| {
+                let (on_line, a, b) = pass(forward, nearer_m);
+                if !forward && !on_line {
+                    return None;
+                }
+                let (cost, way) = planned_way(config, est, &est.pose, &a, speed_mps)?;
+                Some((cost, forward, way, b))
+            })
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+    };
+    // Nearer the door by steps while the approach can come nearer.
+    let deepest = approach_m.min(depth - rear - DOOR_FIT_M) - front;
+    let steps = (deepest / APPROACH_STEP_M).ceil().max(0.0) as usize;
+    let found = (0..=steps).find_map(|k| best(k as f64 * APPROACH_STEP_M));
+    if let Some((_, forward, mut out, b)) = found {
         out.push(through(forward, b));
         return out;
     }
-    let (_, a, b) = pass(true);
+    let (_, a, b) = pass(true, 0.0);
     let mut out = go_to(&config.gains, &est.pose, &a, speed_mps);
     out.push(through(true, b));
     out
