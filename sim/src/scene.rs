@@ -99,6 +99,9 @@ pub struct Walker {
     way: f64,
     /// How long they have been waiting for the robot, s.
     waited_s: f64,
+    /// How far they stand off their path, stepped out of the robot's way,
+    /// m (room frame).
+    aside: nalgebra::Vector2<f64>,
 }
 
 /// A person walking toward the robot stops this far from its body (the
@@ -106,6 +109,14 @@ pub struct Walker {
 const YIELD_M: f64 = 0.45;
 /// After waiting this long for the robot, a person turns back, s.
 const TURN_BACK_S: f64 = 4.0;
+/// A robot whose body comes nearer a person than this has come at them
+/// (they never walk so near it): they step out of its way, m.
+const MAKE_WAY_M: f64 = 0.3;
+/// Stepped out of the robot's way, a person goes back to their path once
+/// the robot's body is this far off, m.
+const BACK_TO_PATH_M: f64 = 1.0;
+/// The bearings a person may step out of the robot's way on.
+const MAKE_WAY_BEARINGS: usize = 16;
 
 impl Walker {
     /// The person's legs and torso where they are now.
@@ -130,6 +141,7 @@ impl Walker {
     /// Position and heading now.
     pub fn pose(&self) -> Pose2 {
         let p = self.pose_along(self.walked_m);
+        let p = Pose2::new(p.x + self.aside.x, p.y + self.aside.y, p.theta);
         if self.way < 0.0 {
             Pose2::new(p.x, p.y, p.theta + std::f64::consts::PI)
         } else {
@@ -139,21 +151,62 @@ impl Walker {
 
     /// Walks on to `t_s`, unless that would bring them within `YIELD_M`
     /// of the robot's body (`robot`: its outline's centre, half extents
-    /// and heading), nearer than they are: then they wait.
-    fn walk_to(&mut self, t_s: f64, robot: Option<(Point2<f64>, [f64; 2], f64)>) {
+    /// and heading), nearer than they are: then they wait. A robot that
+    /// comes at them nearer than [`MAKE_WAY_M`] (backing, it does not see
+    /// them) they step away from, where `free` (a place a person may stand
+    /// on) lets them, and they go back to their path once it is
+    /// [`BACK_TO_PATH_M`] off.
+    fn walk_to(
+        &mut self,
+        t_s: f64,
+        robot: Option<(Point2<f64>, [f64; 2], f64)>,
+        free: impl Fn(&Point2<f64>) -> bool,
+    ) {
         let dt = (t_s - self.t_s).max(0.0);
         let next = self.walked_m + self.way * self.speed_mps * dt;
         self.t_s = t_s;
         if let Some((centre, half, heading)) = robot {
             let frame = Pose2::new(centre.x, centre.y, heading).inverse();
-            let gap = |p: &Pose2| {
-                let q = frame.transform_point(&p.position());
+            let gap_at = |p: &Point2<f64>| {
+                let q = frame.transform_point(p);
                 let (dx, dy) = (
                     (q.x.abs() - half[0]).max(0.0),
                     (q.y.abs() - half[1]).max(0.0),
                 );
                 dx.hypot(dy)
             };
+            let gap = |p: &Pose2| gap_at(&p.position());
+            let here = self.pose().position();
+            let step = self.speed_mps * dt;
+            if gap_at(&here) < MAKE_WAY_M {
+                // The step that takes them furthest from the body.
+                let away = (0..MAKE_WAY_BEARINGS)
+                    .map(|k| {
+                        let a = std::f64::consts::TAU * k as f64 / MAKE_WAY_BEARINGS as f64;
+                        nalgebra::Vector2::new(a.cos(), a.sin()) * step
+                    })
+                    .filter(|d| free(&(here + d)))
+                    .map(|d| (gap_at(&(here + d)), d))
+                    .max_by(|a, b| a.0.total_cmp(&b.0));
+                if let Some((further, d)) = away
+                    && further > gap_at(&here)
+                {
+                    self.aside += d;
+                }
+                return;
+            }
+            if self.aside.norm() > 0.0 {
+                // Back to the path once the robot is off, straight.
+                let back = self.aside.norm().min(step);
+                let to = here - self.aside.normalize() * back;
+                if gap_at(&here) >= BACK_TO_PATH_M && gap_at(&to) >= YIELD_M && free(&to) {
+                    self.aside -= self.aside.normalize() * back;
+                    if self.aside.norm() < 1e-9 {
+                        self.aside = nalgebra::Vector2::zeros();
+                    }
+                }
+                return;
+            }
             let (now, then) = (gap(&self.pose()), gap(&self.pose_along(next)));
             if then < YIELD_M && then < now {
                 self.waited_s += dt;
@@ -267,6 +320,7 @@ impl Scene {
                     t_s: 0.0,
                     way: 1.0,
                     waited_s: 0.0,
+                    aside: nalgebra::Vector2::zeros(),
                 }
             })
             .collect();
@@ -313,8 +367,19 @@ impl Scene {
             )
         });
         self.bodies.clear();
+        let q = self.world.query_pipeline();
+        let person = Cuboid::new(v3(TORSO_RADIUS_M, TORSO_RADIUS_M, 0.5 * PERSON_HEIGHT_M));
+        // Where a person may stand: clear of the walls and what stands.
+        let free = |p: &Point2<f64>| {
+            q.intersect_shape(
+                pose3(&Pose2::new(p.x, p.y, 0.0), 0.5 * PERSON_HEIGHT_M + 0.01),
+                &person,
+            )
+            .next()
+            .is_none()
+        };
         for w in &mut self.walkers {
-            w.walk_to(t_s, outline);
+            w.walk_to(t_s, outline, free);
             self.bodies.extend(w.body());
         }
     }

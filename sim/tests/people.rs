@@ -1,5 +1,6 @@
 //! People in the simulator walk round the robot: a person whose way runs
-//! into a standing robot waits short of it, then turns back.
+//! into a standing robot waits short of it, then turns back; one the
+//! robot comes at steps out of its way.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use stucco_core::{DriveCommand, Platform};
@@ -53,4 +54,54 @@ fn a_person_walking_at_the_standing_robot_waits_then_turns_back() {
         xs.windows(2).any(|w| w[1] - w[0] > 0.01),
         "never turned back"
     );
+}
+
+/// A robot backing (its laser looks ahead: it does not see them) at a
+/// person who stands short of it steps them out of its way: they are not
+/// touched, and go back to their path once it is off.
+#[test]
+fn a_person_the_robot_backs_at_steps_out_of_its_way() {
+    let world = |seed: u64| {
+        let text = format!(
+            "name = \"p\"\nseed = {seed}\n[robot]\nat = [4.0, 1.5]\nheading_deg = 180.0\n\
+             [[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [8.0, 0.0], [8.0, 3.0], [0.0, 3.0]]\n\
+             [[person]]\npath = [[7.5, 1.5], [5.5, 1.5]]\nspeed_mps = 0.8\n"
+        );
+        WorldSpec::parse(&text, "p").unwrap()
+    };
+    let mut sim = Simulator::new(&world(1), SimConfig::default(), None);
+    // Backing east along the person's path, 3.4 m: its rear ends 35 cm
+    // short of the wall, past the path's end.
+    sim.command(DriveCommand {
+        speed_mps: -0.3,
+        steer_rad: 0.0,
+    });
+    let mut off_path = 0.0f64;
+    for k in 0..227 {
+        let r = sim.advance(0.05);
+        assert!(
+            !r.bumper,
+            "the robot backed into the person at {:?} after {:.2} s",
+            sim.truth().people[0],
+            k as f64 * 0.05
+        );
+        let p = sim.truth().people[0];
+        let along = p.x.clamp(5.5, 7.5);
+        off_path = off_path.max((p.x - along).hypot(p.y - 1.5));
+    }
+    assert!(off_path > 0.2, "stepped {off_path:.2} m off the path");
+    // The robot drives off west; the person goes back to their path.
+    sim.command(DriveCommand {
+        speed_mps: 0.5,
+        steer_rad: 0.0,
+    });
+    for _ in 0..200 {
+        sim.advance(0.05);
+    }
+    sim.command(DriveCommand::STOP);
+    for _ in 0..200 {
+        sim.advance(0.05);
+    }
+    let p = sim.truth().people[0];
+    assert!((p.y - 1.5).abs() < 1e-6, "{p:?}");
 }
