@@ -283,7 +283,8 @@ pub struct RoomLeft {
     pub room: String,
     /// Its floor (and ceiling) as drawn, m².
     pub floor_m2: f64,
-    /// Why: no open door leads there, or no task plastered it.
+    /// Why: no open door leads there, or none the robot fits through, or
+    /// no task plastered it.
     pub why: String,
 }
 

@@ -138,6 +138,10 @@ fn rooms_left(
         .as_ref()
         .and_then(|s| s.room.as_deref())
         .and_then(|name| plan.room(name));
+    // As the mission's rooms were put in order (`Mission::parse`).
+    let fits = mission
+        .failsafe
+        .door_width_m(&stucco_core::RobotSpec::default().vehicle);
     plan.rooms()
         .iter()
         .enumerate()
@@ -149,6 +153,11 @@ fn rooms_left(
                 plan.route(s, i).is_none()
             }) {
                 "no open door leads there".to_owned()
+            } else if start.is_some_and(|s| plan.route_for(s, i, fits).is_none()) {
+                format!(
+                    "no door the robot fits through with its field leads there (it needs \
+                     {fits:.2} m)"
+                )
             } else if mission.plaster_rooms().contains(&r.name) {
                 "the job ended before it".to_owned()
             } else {

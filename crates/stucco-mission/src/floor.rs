@@ -417,6 +417,12 @@ impl FloorPlan {
     /// own place in `from` is left out: rooms are small against a floor).
     /// Empty when `from == to`; `None` when no way joins them.
     pub fn route(&self, from: usize, to: usize) -> Option<Vec<usize>> {
+        self.route_for(from, to, 0.0)
+    }
+
+    /// [`FloorPlan::route`] through doors at least `width_m` wide only
+    /// (those a robot fits through with its protective field).
+    pub fn route_for(&self, from: usize, to: usize, width_m: f64) -> Option<Vec<usize>> {
         if from == to {
             return Some(Vec::new());
         }
@@ -427,7 +433,10 @@ impl FloorPlan {
         let node =
             |door: usize, room: usize| 2 * door + usize::from(self.sides[door][1].room == room);
         let mut open = BTreeSet::new();
-        for (d, _) in self.doors_of(from) {
+        for (d, _) in self
+            .doors_of(from)
+            .filter(|(d, _)| self.doors[*d].width_m >= width_m)
+        {
             let Some(r) = self.beyond(d, from) else {
                 continue;
             };
@@ -448,7 +457,10 @@ impl FloorPlan {
                 return Some(path);
             }
             let here = Vector2::from(self.doors[door].at_m);
-            for (next, _) in self.doors_of(room) {
+            for (next, _) in self
+                .doors_of(room)
+                .filter(|(d, _)| self.doors[*d].width_m >= width_m)
+            {
                 let Some(r) = self.beyond(next, room) else {
                     continue;
                 };
@@ -590,6 +602,15 @@ mod tests {
         assert_eq!(p.route(2, 1), Some(vec![2]));
         // From the corridor to b: its own door, not through a.
         assert_eq!(p.route(0, 2), Some(vec![1]));
+        // Only through doors as wide as asked: a to b through the
+        // corridor, where their own door is narrower; none at all wider.
+        let mut doors = p.doors().to_vec();
+        doors[2].width_m = 0.7;
+        let q = FloorPlan::new(p.rooms().to_vec(), doors).unwrap();
+        assert_eq!(q.route_for(1, 2, 0.7), Some(vec![2]));
+        assert_eq!(q.route_for(1, 2, 0.74), Some(vec![0, 1]));
+        assert_eq!(q.route_for(1, 2, 1.1), None);
+        assert_eq!(q.route_for(1, 1, 1.1), Some(vec![]));
         // Without the door a–b, a to b is through the corridor.
         let mut doors = p.doors().to_vec();
         doors.pop();

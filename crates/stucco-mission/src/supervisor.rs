@@ -115,6 +115,14 @@ impl Default for SafetyConfig {
 }
 
 impl SafetyConfig {
+    /// The narrowest door a robot `vehicle` drives through with this
+    /// field, m: its body, the field's sides, and a centimetre either
+    /// side for the line law's tracking. Through a narrower one the field
+    /// holds the robot on the jambs.
+    pub fn door_width_m(&self, vehicle: &VehicleSpec) -> f64 {
+        vehicle.width_m + 2.0 * (self.lateral_margin_m + DOOR_TRACK_M)
+    }
+
     /// The first value out of its range: the key and why.
     pub fn invalid(&self) -> Option<(&'static str, &'static str)> {
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
@@ -166,6 +174,9 @@ pub struct Supervisor {
     granted_mps: f64,
 }
 
+/// How far the line law lets the body stray off a door's line on the run
+/// through it, m.
+const DOOR_TRACK_M: f64 = 0.01;
 /// The slowest speed the supervisor slows a command to before it stops
 /// it, m/s (3 cm/s at the wheel, as a manoeuvre ends its moves).
 const CREEP_MPS: f64 = 0.05;

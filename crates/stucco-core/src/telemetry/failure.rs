@@ -283,7 +283,11 @@ impl std::fmt::Display for TaskFailure {
                 write!(f, "go_to_room: the robot does not know which room it is in")
             }
             TaskFailure::NoRoute { from, to } => {
-                write!(f, "go_to_room: no way on the plan from {from} to {to}")
+                write!(
+                    f,
+                    "go_to_room: no way on the plan from {from} to {to} through open doors the \
+                     robot fits through with its field"
+                )
             }
             TaskFailure::PlanDoorNotSeen { door } => write!(
                 f,

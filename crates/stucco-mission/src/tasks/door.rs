@@ -298,7 +298,8 @@ pub(crate) fn route(
     let Some(here) = est.room else {
         return Err(TaskFailure::RoomNotKnown);
     };
-    floor.route(here, to).ok_or_else(|| {
+    let fits = config.safety.door_width_m(&config.vehicle);
+    floor.route_for(here, to, fits).ok_or_else(|| {
         let from = floor.rooms().get(here).map_or("here", |r| r.name.as_str());
         TaskFailure::NoRoute {
             from: from.to_owned(),
