@@ -6,16 +6,27 @@
 use stucco_core::{DriveCommand, Platform};
 use stucco_sim::{SimConfig, Simulator, WorldSpec};
 
+/// An 8 × 3 m room, the robot `at` heading `heading_deg`, and one person
+/// walking `path` at `speed_mps`.
+fn room_with_person(
+    seed: u64,
+    at: &str,
+    heading_deg: f64,
+    path: &str,
+    speed_mps: f64,
+) -> WorldSpec {
+    let text = format!(
+        "name = \"p\"\nseed = {seed}\n[robot]\nat = {at}\nheading_deg = {heading_deg:?}\n\
+         [[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [8.0, 0.0], [8.0, 3.0], [0.0, 3.0]]\n\
+         [[person]]\npath = {path}\nspeed_mps = {speed_mps:?}\n"
+    );
+    WorldSpec::parse(&text, "p").unwrap()
+}
+
 #[test]
 fn a_person_walking_at_the_standing_robot_waits_then_turns_back() {
-    let world = |seed: u64| {
-        let text = format!(
-            "name = \"p\"\nseed = {seed}\n[robot]\nat = [2.0, 1.5]\nheading_deg = 0.0\n\
-             [[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [8.0, 0.0], [8.0, 3.0], [0.0, 3.0]]\n\
-             [[person]]\npath = [[7.5, 1.5], [0.5, 1.5]]\nspeed_mps = 1.0\n"
-        );
-        WorldSpec::parse(&text, "p").unwrap()
-    };
+    let world =
+        |seed: u64| room_with_person(seed, "[2.0, 1.5]", 0.0, "[[7.5, 1.5], [0.5, 1.5]]", 1.0);
     // The first seed whose person starts east of the robot walking west,
     // at it (each person starts somewhere along their path).
     let mut sim = (1..100)
@@ -61,15 +72,8 @@ fn a_person_walking_at_the_standing_robot_waits_then_turns_back() {
 /// touched, and go back to their path once it is off.
 #[test]
 fn a_person_the_robot_backs_at_steps_out_of_its_way() {
-    let world = |seed: u64| {
-        let text = format!(
-            "name = \"p\"\nseed = {seed}\n[robot]\nat = [4.0, 1.5]\nheading_deg = 180.0\n\
-             [[room]]\nname = \"r\"\ncorners = [[0.0, 0.0], [8.0, 0.0], [8.0, 3.0], [0.0, 3.0]]\n\
-             [[person]]\npath = [[7.5, 1.5], [5.5, 1.5]]\nspeed_mps = 0.8\n"
-        );
-        WorldSpec::parse(&text, "p").unwrap()
-    };
-    let mut sim = Simulator::new(&world(1), SimConfig::default(), None);
+    let world = room_with_person(1, "[4.0, 1.5]", 180.0, "[[7.5, 1.5], [5.5, 1.5]]", 0.8);
+    let mut sim = Simulator::new(&world, SimConfig::default(), None);
     // Backing east along the person's path, 3.4 m: its rear ends 35 cm
     // short of the wall, past the path's end.
     sim.command(DriveCommand {

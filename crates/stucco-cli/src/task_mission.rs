@@ -138,10 +138,7 @@ fn rooms_left(
         .as_ref()
         .and_then(|s| s.room.as_deref())
         .and_then(|name| plan.room(name));
-    // As the mission's rooms were put in order (`Mission::parse`).
-    let fits = mission
-        .failsafe
-        .door_width_m(&stucco_core::RobotSpec::default().vehicle);
+    let fits = mission.door_width_m();
     plan.rooms()
         .iter()
         .enumerate()

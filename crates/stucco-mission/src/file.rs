@@ -362,7 +362,7 @@ impl Mission {
                         i + 1
                     );
                 };
-                let fits = mission.failsafe.door_width_m(&RobotSpec::default().vehicle);
+                let fits = mission.door_width_m();
                 if let (Some(p), Some(from)) = (&plan, here)
                     && p.route_for(from, to, fits).is_none()
                 {
@@ -518,7 +518,7 @@ impl Mission {
             // The nearest room left, by doors passed (the room the robot is
             // in first); those no way leads to through doors the robot
             // fits through are left named.
-            let fits = self.failsafe.door_width_m(&RobotSpec::default().vehicle);
+            let fits = self.door_width_m();
             while let Some((_, j)) = left
                 .iter()
                 .enumerate()
@@ -540,6 +540,14 @@ impl Mission {
         self.named_rooms = named;
         self.tasks = tasks;
         Ok(())
+    }
+
+    /// The narrowest door the robot drives through with the mission's
+    /// failsafe, m ([`SafetyConfig::door_width_m`] of the default robot,
+    /// as the spray tool is checked against it): the routes between the
+    /// drawing's rooms go through none narrower.
+    pub fn door_width_m(&self) -> f64 {
+        self.failsafe.door_width_m(&RobotSpec::default().vehicle)
     }
 
     /// The drawing's rooms the mission's `plaster` tasks plaster: each

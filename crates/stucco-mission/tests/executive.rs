@@ -2286,6 +2286,33 @@ fn apartment() -> FloorPlan {
     .unwrap()
 }
 
+/// Runs `exec` on `robot` in the apartment `plan` for at most `max_s`,
+/// moving the robot's frame through each door the executive says it went
+/// through: those doors, and how near a wall the body came at the
+/// closest ([`body_inside`]).
+fn run_rooms_inside(
+    exec: &mut Executive,
+    robot: &mut Robot,
+    plan: &FloorPlan,
+    max_s: f64,
+) -> (Vec<usize>, f64) {
+    let mut doors = Vec::new();
+    let mut closest = f64::INFINITY;
+    for _ in 0..(max_s / DT) as usize {
+        let out = ask(exec, robot, Seen::default());
+        if let Some(door) = out.enter_room {
+            doors.push(door);
+            robot.through(plan, door);
+        }
+        robot.drive(out.drive);
+        closest = closest.min(body_inside(robot, plan));
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    (doors, closest)
+}
+
 /// How far the body's corners keep inside the rooms of `plan`, m
 /// (negative: into a wall); a corner in a door's gap through a wall is
 /// not counted. The room frames
@@ -2349,20 +2376,7 @@ fn the_robot_turns_in_a_hall_too_narrow_to_turn_on_the_spot_in() {
         })
         .collect();
     let mut exec = Executive::new(cfg, tasks);
-    let mut doors = Vec::new();
-    let mut closest = f64::INFINITY;
-    for _ in 0..(900.0 / DT) as usize {
-        let out = ask(&mut exec, &robot, Seen::default());
-        if let Some(door) = out.enter_room {
-            doors.push(door);
-            robot.through(&plan, door);
-        }
-        robot.drive(out.drive);
-        closest = closest.min(body_inside(&robot, &plan));
-        if exec.mode().is_final() {
-            break;
-        }
-    }
+    let (doors, closest) = run_rooms_inside(&mut exec, &mut robot, &plan, 900.0);
     assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
     assert_eq!(doors, [0, 1, 1, 2, 2, 0]);
     assert_eq!(robot.room, Some(0));
@@ -2387,20 +2401,7 @@ fn a_door_out_of_a_narrow_hall_is_approached_where_the_robot_can_turn_into_it() 
     let mut cfg = config(true);
     cfg.floor = Some(plan.clone());
     let mut exec = Executive::new(cfg, vec![go_to("living")]);
-    let mut doors = Vec::new();
-    let mut closest = f64::INFINITY;
-    for _ in 0..(600.0 / DT) as usize {
-        let out = ask(&mut exec, &robot, Seen::default());
-        if let Some(door) = out.enter_room {
-            doors.push(door);
-            robot.through(&plan, door);
-        }
-        robot.drive(out.drive);
-        closest = closest.min(body_inside(&robot, &plan));
-        if exec.mode().is_final() {
-            break;
-        }
-    }
+    let (doors, closest) = run_rooms_inside(&mut exec, &mut robot, &plan, 600.0);
     assert_eq!(exec.mode(), &MissionMode::Done, "{:?}", exec.status());
     assert_eq!(doors, [0]);
     assert_eq!(robot.room, Some(0));
