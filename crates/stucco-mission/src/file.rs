@@ -1089,6 +1089,15 @@ room = "office"
             .expect_err("no way the robot fits")
             .to_string();
         assert!(e.contains("0.74 m wide or more"), "{e}");
+        let line = to_store
+            .lines()
+            .position(|l| l == "room = \"store\"")
+            .expect("the line")
+            + 1;
+        assert!(
+            e.starts_with(&format!("drawn.toml:{line}: task 1 (go_to_room): room:")),
+            "{e}"
+        );
     }
 
     #[test]
