@@ -1823,6 +1823,101 @@ fn a_station_whose_way_stays_blocked_is_put_last_and_done_at_the_end() {
     assert_eq!(started, stations);
 }
 
+/// A chair the plan did not know (first seen once the first station is
+/// done) stands where a later station's body would: the map holds it from
+/// then and the laser sees its legs' box. The plan takes it in at the next
+/// station: that station is put last and, its turn come with the chair
+/// still there, given up without going there; every way is planned round
+/// the chair, so the field never holds the robot for it, and the job is
+/// done with every other station plastered.
+#[test]
+fn a_chair_seen_after_the_plan_in_a_stations_place_is_planned_round_and_its_station_given_up() {
+    let (mut exec, mut robot) = plastering_alone();
+    let spec = VehicleSpec::default();
+    let (mut events, mut chair) = (Vec::<Event>::new(), None::<(usize, stucco_plan::Obstacle)>);
+    let mut held = 0;
+    for _ in 0..(6000.0 / DT) as usize {
+        // The chair's outline every 2 cm, as the laser sees it (robot
+        // frame, within 4 m).
+        let seen: Vec<Point2<f64>> = chair
+            .iter()
+            .flat_map(|(_, o)| {
+                let [x0, y0] = o.min_m;
+                let [x1, y1] = o.max_m;
+                (0..=22).flat_map(move |i| {
+                    let f = f64::from(i) / 22.0;
+                    let (x, y) = (x0 + f * (x1 - x0), y0 + f * (y1 - y0));
+                    [(x, y0), (x, y1), (x0, y), (x1, y)]
+                })
+            })
+            .map(|(x, y)| robot.pose.inverse().transform_point(&Point2::new(x, y)))
+            .filter(|p| p.coords.norm() < 4.0)
+            .collect();
+        let out = ask_seeing(&mut exec, &robot, &seen);
+        held += usize::from(exec.hazard() == Some(Hazard::Obstacle));
+        let first_done = out
+            .events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::PassDone { station: 0, .. }));
+        if chair.is_none()
+            && first_done
+            && let Some(plan) = exec.plaster_plan()
+        {
+            // The middle station of the longest lane along a wall, its
+            // body's middle (from the stations on either side of it the
+            // rest of the lane is reached round the chair).
+            let lane_of = |k: usize| plan.stations[k].lane;
+            let lanes = plan.stations.iter().map(|s| s.lane);
+            let longest = lanes
+                .filter(|l| matches!(l, stucco_plan::Lane::Wall(_)))
+                .max_by_key(|l| plan.stations.iter().filter(|s| s.lane == *l).count())
+                .expect("a wall's lane");
+            let along: Vec<usize> = (0..plan.stations.len())
+                .filter(|&k| lane_of(k) == longest)
+                .collect();
+            let k = along[along.len() / 2];
+            let b = plan.stations[k].base;
+            let middle = b.transform_point(&Point2::new(
+                0.5 * (spec.front_m() - spec.rear_overhang_m),
+                0.0,
+            ));
+            let o = stucco_plan::Obstacle {
+                min_m: [middle.x - 0.225, middle.y - 0.225],
+                max_m: [middle.x + 0.225, middle.y + 0.225],
+                height_m: 0.45,
+            };
+            robot.floor = vec![o];
+            chair = Some((k, o));
+        }
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(*exec.mode(), MissionMode::Done, "{:?}", kinds(&events));
+    let (k, _) = chair.expect("the first station done");
+    let moved: Vec<(&str, usize)> = events
+        .iter()
+        .filter_map(|e| match e.kind {
+            EventKind::StationDeferred { station, .. } => Some(("put last", station)),
+            EventKind::StationGivenUp { station, .. } => Some(("given up", station)),
+            _ => None,
+        })
+        .collect();
+    let stations = planned_stations(&events);
+    // Put last from where it was, and given up as the last.
+    assert_eq!(
+        moved,
+        [("put last", k), ("given up", stations - 1)],
+        "of {stations}"
+    );
+    let k = kinds(&events);
+    let started = k.iter().filter(|k| *k == "station_started").count();
+    assert_eq!(started, stations - 1, "{k:?}");
+    assert_eq!(held, 0, "held {held} ticks for the chair");
+}
+
 /// On the kinematic robot with a perfect estimate, a 5 × 3 m room: every
 /// pass of the plan is sprayed, the nozzle only ever within the gantry's
 /// travel and spraying only while standing, a checkpoint due at least
