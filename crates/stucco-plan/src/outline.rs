@@ -114,9 +114,12 @@ impl<'a> Outline<'a> {
 
     /// Distance from `p` to the nearest edge, m.
     pub fn distance_m(&self, p: &Point2<f64>) -> f64 {
-        self.edges()
-            .map(|(a, b)| segment_distance(&a, &b, p))
-            .fold(f64::INFINITY, f64::min)
+        self.edge_distances_m(p).fold(f64::INFINITY, f64::min)
+    }
+
+    /// Distance from `p` to each edge, wall by wall, m.
+    pub fn edge_distances_m<'p>(&'p self, p: &'p Point2<f64>) -> impl Iterator<Item = f64> + 'p {
+        self.edges().map(move |(a, b)| segment_distance(&a, &b, p))
     }
 
     /// How far `p` stands inside: its distance to the nearest edge, or
