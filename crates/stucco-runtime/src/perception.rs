@@ -1639,6 +1639,7 @@ mod tests {
     /// widened to 1.9 m by the notch's), and an echo as near the notch's
     /// walls is not.
     #[test]
+    #[allow(clippy::expect_used)]
     fn an_unseen_wall_widens_the_band_along_itself_alone() {
         // 7 × 6 m, the notch 0.6 m deep in the north wall at x 1–2 m.
         let corners = vec![
