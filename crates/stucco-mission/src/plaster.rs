@@ -10,12 +10,11 @@
 //! the spray, the nozzle waits where it is and goes on after.
 
 use crate::model::Estimate;
-use crate::route::Floor;
-use nalgebra::{Point2, Point3, Vector2, Vector3};
+use nalgebra::{Point2, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 pub use stucco_core::telemetry::{PlasterCoverage, SurfaceCoverage};
-use stucco_core::{Aim, Pose2, ToolCommand, VehicleSpec};
-use stucco_plan::{Lane, Obstacle, Plan, SurfaceId, WallLine};
+use stucco_core::{Aim, Pose2, ToolCommand};
+use stucco_plan::{Lane, Plan, SurfaceId, WallLine};
 
 /// Where a plastering task is: the next spray move to carry out.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
@@ -169,89 +168,6 @@ impl PlasterRun {
         self.deferred.push(base);
         self.station_changed();
         true
-    }
-
-    /// Takes what the map holds on the floor now (`obstacles`) and the
-    /// plan did not into the plan, so that the ways between its stations
-    /// go round what the robot has seen since (a chair first seen from the
-    /// room's middle, standing in the lane along a wall): each of the
-    /// map's boxes that meets none of the plan's. (One that does is
-    /// furniture the plan knew, seen better or merged with what stands
-    /// near it: the merged box holds floor between them nothing stands
-    /// on, and is not taken for more furniture.) A station still to come
-    /// whose body stood clear of what the plan knew and stands on what is
-    /// taken in is put last, once, as a station whose way stayed blocked
-    /// is (what stands there may be someone who walks on). A station put
-    /// last whose turn has come and whose body stands on what the plan
-    /// now holds is given up without going there (the plan's stations
-    /// stand clear of what it was made on by more than the margin this
-    /// checks), what only it reached reported unreachable. Returns each
-    /// station so moved, its index then and, when it was given up, the
-    /// area lost with it.
-    pub fn take_in_floor(
-        &mut self,
-        obstacles: &[Obstacle],
-        vehicle: &VehicleSpec,
-    ) -> Vec<(usize, Option<f64>)> {
-        let stands_clear = |floor: &Floor<'_>, base: &Pose2| {
-            let p = base.position().coords;
-            floor.sweep_clear(&p, &p, &Vector2::new(base.theta.cos(), base.theta.sin()))
-        };
-        let meet = |a: &Obstacle, b: &Obstacle| {
-            (0..2).all(|i| a.min_m[i] < b.max_m[i] && b.min_m[i] < a.max_m[i])
-        };
-        let known = &self.plan.room.obstacles;
-        let new: Vec<Obstacle> = obstacles
-            .iter()
-            .filter(|o| !known.iter().any(|k| meet(o, k)))
-            .copied()
-            .collect();
-        let size = self.plan.room.size_m;
-        let first = self.cursor.station;
-        let mut out = Vec::new();
-        let new_floor = !new.is_empty();
-        if new_floor {
-            let mut all = known.clone();
-            all.extend(new);
-            let (before, now) = (
-                Floor::new(size, known, vehicle, 0.0),
-                Floor::new(size, &all, vehicle, 0.0),
-            );
-            let put_last: Vec<usize> = (first..self.plan.stations.len())
-                .filter(|&k| {
-                    let base = self.plan.stations[k].base;
-                    !self.deferred.contains(&base)
-                        && stands_clear(&before, &base)
-                        && !stands_clear(&now, &base)
-                })
-                .collect();
-            let mut last = Vec::new();
-            for &k in put_last.iter().rev() {
-                let station = self.plan.stations.remove(k);
-                self.deferred.push(station.base);
-                last.push(station);
-                out.push((k, None));
-            }
-            last.reverse();
-            self.plan.stations.extend(last);
-            self.plan.room.obstacles = all;
-        }
-        let held = self.plan.room.obstacles.clone();
-        let now = Floor::new(size, &held, vehicle, 0.0);
-        while let Some(base) = self.plan.stations.get(first).map(|s| s.base)
-            && self.deferred.contains(&base)
-            && !stands_clear(&now, &base)
-            && let Some(area) = self.plan.give_up_station(first)
-        {
-            self.given_up = (self.given_up.0 + 1, self.given_up.1 + area);
-            out.push((first, Some(area)));
-        }
-        if out.iter().any(|&(k, _)| k == first) {
-            self.station_changed();
-        } else if new_floor || !out.is_empty() {
-            self.digest = plan_digest(&self.plan);
-        }
-        out
     }
 
     /// Puts `plan` in place of the one carried out, from its start.

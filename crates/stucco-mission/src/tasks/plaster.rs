@@ -464,11 +464,6 @@ impl Task for Plaster {
                         cx.effects.checkpoint = true;
                     }
                     let station_done = run.advance();
-                    if station_done {
-                        // Seen from this station: what stands in the
-                        // rest's way.
-                        let _ = take_in_floor(cx, run);
-                    }
                     if run.cursor.pass != c.pass || station_done {
                         cx.emit(EventKind::PassDone {
                             task: index,
@@ -599,12 +594,7 @@ impl Task for Plaster {
         {
             let station = run.cursor.station;
             let unchecked = run.way_unchecked;
-            // What holds it may be what the map holds now and the plan
-            // did not (first seen from here): the stations standing on it
-            // are given up and the ways planned round it.
-            if take_in_floor(cx, run) {
-                // Put last or given up with what it stands on.
-            } else if !unchecked && run.defer_station() {
+            if !unchecked && run.defer_station() {
                 cx.emit(EventKind::StationDeferred {
                     task: index,
                     station,
@@ -1027,30 +1017,6 @@ fn next_station_way(
     let (way, clear) = station_way(config, &floor, run, run.cursor.station, from, speed);
     run.way_unchecked = !clear;
     way
-}
-
-/// Takes what the map holds on the floor now into `run`'s plan before the
-/// way to its next station is planned (see [`PlasterRun::take_in_floor`]),
-/// saying which stations that put last or gave up; the checkpoint is then
-/// written again, with the plan it names. True when the station at the
-/// cursor was one of them.
-fn take_in_floor(cx: &mut TaskCx<'_>, run: &mut PlasterRun) -> bool {
-    let (before, at) = (run.digest.clone(), run.cursor.station);
-    let mut cursor_moved = false;
-    for (station, lost) in run.take_in_floor(&cx.est.obstacles, &cx.config.vehicle) {
-        cursor_moved |= station == at;
-        let task = cx.index;
-        cx.emit(match lost {
-            None => EventKind::StationDeferred { task, station },
-            Some(unreachable_m2) => EventKind::StationGivenUp {
-                task,
-                station,
-                unreachable_m2,
-            },
-        });
-    }
-    cx.effects.checkpoint |= run.digest != before;
-    cursor_moved
 }
 
 /// The space the way between stations is checked in: the plan's room,
