@@ -115,11 +115,6 @@ const MAKE_WAY_M: f64 = 0.3;
 /// Stepped out of the robot's way, a person goes back to their path once
 /// the robot's body is this far off, m.
 const BACK_TO_PATH_M: f64 = 1.0;
-/// How far ahead a person stepping out of the robot's way looks for
-/// where each way leads, m (a few strides), and in how many steps.
-const LOOK_M: f64 = 1.5;
-/// See [`LOOK_M`].
-const LOOK_STEPS: usize = 6;
 /// The bearings a person may step out of the robot's way on.
 const MAKE_WAY_BEARINGS: usize = 16;
 
@@ -183,41 +178,20 @@ impl Walker {
             let gap = |p: &Pose2| gap_at(&p.position());
             let here = self.pose().position();
             let step = self.speed_mps * dt;
-            // Stepped aside beside a robot that stays (held by them in its
-            // field, it waits for them to go): after a while they walk
-            // off, as far as it takes to go back to their path.
-            let beside = self.aside.norm() > 0.0 && gap_at(&here) < BACK_TO_PATH_M;
-            if beside {
-                self.waited_s += dt;
-            }
-            if gap_at(&here) < MAKE_WAY_M || (beside && self.waited_s > TURN_BACK_S) {
-                // The way that leads furthest from the body within a few
-                // strides (round it, where straight away is a wall), of
-                // the steps that bring them no nearer (or, where they are
-                // as far as they would stop short of it, keep them so).
-                let gap = gap_at(&here);
-                let leads_to = |u: &nalgebra::Vector2<f64>| {
-                    (1..=LOOK_STEPS)
-                        .map(|j| here + u * (LOOK_M * j as f64 / LOOK_STEPS as f64))
-                        .take_while(|p| free(p))
-                        .map(|p| gap_at(&p))
-                        .fold(f64::NEG_INFINITY, f64::max)
-                };
+            if gap_at(&here) < MAKE_WAY_M {
+                // The step that takes them furthest from the body.
                 let away = (0..MAKE_WAY_BEARINGS)
                     .map(|k| {
                         let a = std::f64::consts::TAU * k as f64 / MAKE_WAY_BEARINGS as f64;
-                        nalgebra::Vector2::new(a.cos(), a.sin())
+                        nalgebra::Vector2::new(a.cos(), a.sin()) * step
                     })
-                    .filter(|u| {
-                        let to = here + u * step;
-                        free(&to) && gap_at(&to) >= gap.min(YIELD_M)
-                    })
-                    .map(|u| (leads_to(&u), u))
+                    .filter(|d| free(&(here + d)))
+                    .map(|d| (gap_at(&(here + d)), d))
                     .max_by(|a, b| a.0.total_cmp(&b.0));
-                if let Some((further, u)) = away
-                    && further > gap
+                if let Some((further, d)) = away
+                    && further > gap_at(&here)
                 {
-                    self.aside += u * step;
+                    self.aside += d;
                 }
                 return;
             }
@@ -226,7 +200,6 @@ impl Walker {
                 let back = self.aside.norm().min(step);
                 let to = here - self.aside.normalize() * back;
                 if gap_at(&here) >= BACK_TO_PATH_M && gap_at(&to) >= YIELD_M && free(&to) {
-                    self.waited_s = 0.0;
                     self.aside -= self.aside.normalize() * back;
                     if self.aside.norm() < 1e-9 {
                         self.aside = nalgebra::Vector2::zeros();
