@@ -62,7 +62,8 @@ pub use file::{
 pub use floor::{DoorSide, FloorPlan, PlanDoor, PlanFault, PlanRoom, PlanWindow};
 pub use ledger::{MAX_DEADLINE_AHEAD_S, MAX_ID_BYTES, MAX_KEPT, MAX_OPERATOR_BYTES};
 pub use model::{
-    DoorEstimate, Estimate, WallGeometry, WindowEstimate, room_walls, wall_in, walls_of_room,
+    DoorEstimate, Estimate, WallGeometry, WindowEstimate, room_walls, wall_in, wall_sigma,
+    walls_of_room,
 };
 pub use plaster::{Cursor, PlasterCoverage, PlasterProgress, SurfaceCoverage, plan_digest};
 pub use supervisor::{

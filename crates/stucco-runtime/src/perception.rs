@@ -10,6 +10,7 @@ use nalgebra::{DVector, Matrix2, Point2, SVector};
 use stucco_core::{EncoderSample, Pose2, Readings, RobotSpec, Stamp, TOOL_CAMERA, Twist2};
 use stucco_mission::{
     DoorEstimate, Estimate, FloorPlan, WallGeometry, WallName, WindowEstimate, room_walls,
+    wall_sigma,
 };
 use stucco_nav::{
     DoorConfig, DoorOpening, OdometryConfig, ProfilePose, RoomConfig, RoomCovariance, RoomEkf,
@@ -183,23 +184,16 @@ impl<'a> OnFloor<'a> {
         if est.position_sigma_m > FLOOR_MAX_SIGMA_M {
             return None;
         }
-        let off =
-            |wall_sigma: f64| FLOOR_OFF_WALL_M + FLOOR_SIGMAS * (est.position_sigma_m + wall_sigma);
-        let room_sigma = est.room_sigma_m.iter().fold(0.0f64, |a, &b| a.max(b));
+        let off = |sigma: f64| FLOOR_OFF_WALL_M + FLOOR_SIGMAS * (est.position_sigma_m + sigma);
         let outline = (!est.corners.is_empty()).then(|| stucco_plan::Outline::new(&est.corners));
-        let off_m = match &outline {
-            Some(_) if est.walls_sigma_m.len() == est.corners.len() => {
-                est.walls_sigma_m.iter().map(|&s| off(s)).collect()
-            }
-            Some(_) => vec![off(room_sigma); est.corners.len()],
-            // The west and south walls fix the frame.
-            None => vec![
-                off(0.0),
-                off(0.0),
-                off(est.room_sigma_m[0]),
-                off(est.room_sigma_m[1]),
-            ],
+        // A polygon's walls in its corners' order; a rectangle's west,
+        // south, east and north.
+        let walls = if est.corners.is_empty() {
+            4
+        } else {
+            est.corners.len()
         };
+        let off_m = (0..walls).map(|k| off(wall_sigma(est, k))).collect();
         Some(OnFloor {
             outline,
             room_m: est.room_m,
