@@ -125,10 +125,12 @@ pub struct PassReport {
 }
 
 /// The rooms of `mission`'s floor plan none of `plastered` is, each with
-/// its drawn floor and why.
+/// its drawn floor and why; `status` is each of the mission's tasks' (a
+/// room given up names its task's failure).
 fn rooms_left(
     mission: &Mission,
     plastered: &[crate::plastering::RoomPlaster],
+    status: &[TaskStatus],
 ) -> Vec<crate::plastering::RoomLeft> {
     let Some(plan) = mission.floor_plan() else {
         return Vec::new();
@@ -154,6 +156,17 @@ fn rooms_left(
                 format!(
                     "no door the robot fits through with its field leads there (it needs \
                      {fits:.2} m)"
+                )
+            } else if let Some((k, reason)) = status.iter().enumerate().find_map(|(k, s)| match s {
+                TaskStatus::Failed { reason } if mission.task_room(k) == Some(&r.name) => {
+                    Some((k, reason))
+                }
+                _ => None,
+            }) {
+                format!(
+                    "given up: task {} ({}) failed: {reason}",
+                    k + 1,
+                    mission.tasks[k].name()
                 )
             } else if mission.plaster_rooms().contains(&r.name) {
                 "the job ended before it".to_owned()
@@ -1117,7 +1130,7 @@ impl<'a, P: Simulated> SimJob<'a, P> {
             mission_time_s: plastered.as_ref().and_then(|p| p.2),
             mission_time_lower_bound_s: plastered.as_ref().map(|p| p.3),
             plaster: plastered.map(|(score, rooms, _, _)| {
-                let rooms_left = rooms_left(mission, &rooms);
+                let rooms_left = rooms_left(mission, &rooms, &exec.progress().status);
                 crate::plastering::PlasterReport {
                     stations: rooms.iter().map(|r| r.stations).sum(),
                     unreachable_m2: rooms.iter().map(|r| r.unreachable_m2).sum(),

@@ -82,6 +82,11 @@ pub struct Mission {
     /// The drawing's rooms the `plaster` tasks plaster ([`Mission::plaster_rooms`]).
     #[serde(skip)]
     named_rooms: Vec<String>,
+    /// For each task, the room whose share of a job over rooms it is
+    /// (going there, mapping it, plastering it) and that share's number
+    /// ([`Mission::task_room`]).
+    #[serde(skip)]
+    task_rooms: Vec<Option<(usize, String)>>,
     /// The mission file's text as it was parsed.
     #[serde(skip)]
     text: String,
@@ -455,6 +460,8 @@ impl Mission {
             }
         };
         let mut tasks = Vec::with_capacity(self.tasks.len());
+        let mut task_rooms = Vec::with_capacity(self.tasks.len());
+        let mut shares = 0;
         for (i, task) in std::mem::take(&mut self.tasks).into_iter().enumerate() {
             let (
                 TaskSpec::Plaster {
@@ -485,6 +492,7 @@ impl Mission {
                     _ => {}
                 }
                 tasks.push(task);
+                task_rooms.push(None);
                 continue;
             };
             let mut left: Vec<usize> = match rooms {
@@ -529,16 +537,21 @@ impl Mission {
                 .min()
             {
                 let room = left.remove(j);
+                let share = Some((shares, plan.rooms()[room].name.clone()));
+                shares += 1;
                 if here != Some(room) {
                     tasks.push(TaskSpec::go_to_room(&plan.rooms()[room].name));
+                    task_rooms.push(share.clone());
                 }
                 tasks.push(TaskSpec::map_room());
                 tasks.push(each.clone());
+                task_rooms.extend([share.clone(), share]);
                 here = Some(room);
             }
         }
         self.named_rooms = named;
         self.tasks = tasks;
+        self.task_rooms = task_rooms;
         Ok(())
     }
 
@@ -548,6 +561,12 @@ impl Mission {
     /// drawing's rooms go through none narrower.
     pub fn door_width_m(&self) -> f64 {
         self.failsafe.door_width_m(&RobotSpec::default().vehicle)
+    }
+
+    /// The room task `k` is a share of, when it is one of a job over rooms
+    /// (`plaster` with `rooms`: going there, mapping it, plastering it).
+    pub fn task_room(&self, k: usize) -> Option<&str> {
+        self.task_rooms.get(k)?.as_ref().map(|(_, r)| r.as_str())
     }
 
     /// The drawing's rooms the mission's `plaster` tasks plaster: each
@@ -711,6 +730,12 @@ impl Mission {
                 body_camera_azimuth_rad: robot.camera.map(|c| c.azimuth_rad),
             },
             self.tasks.clone(),
+        )
+        .with_rooms(
+            self.task_rooms
+                .iter()
+                .map(|r| r.as_ref().map(|(share, _)| *share))
+                .collect(),
         )
     }
 
@@ -1130,6 +1155,18 @@ room = "office"
             ]
         );
         assert_eq!(m.plaster_rooms(), ["hall", "office", "store"]);
+        // Each task is of its room's share: a failure gives up that room.
+        assert_eq!(
+            (0..6).map(|k| m.task_room(k)).collect::<Vec<_>>(),
+            [
+                Some("hall"),
+                Some("hall"),
+                Some("office"),
+                Some("office"),
+                Some("office"),
+                None
+            ]
+        );
         let m = Mission::parse(&plaster_rooms("[\"office\"]"), Path::new("drawn.toml"))
             .expect("a mission");
         assert_eq!(names(&m), ["go_to_room office", "map_room", "plaster"]);

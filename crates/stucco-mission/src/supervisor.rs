@@ -41,13 +41,21 @@ pub enum LinkLossPolicy {
 
 /// What a scripted task's failure does to the mission (an operator's task
 /// fails alone whatever the policy: the robot stands ready for the next
-/// command).
+/// command). Touching something or the e-stop with nobody there, and the
+/// estimate lost, stop it whatever the policy.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FailurePolicy {
+    /// A task of one room of a job over rooms (`plaster` with `rooms`:
+    /// going there, mapping it, plastering it) gives that room up — its
+    /// tasks still to come are skipped — and the job goes on with the
+    /// next room, and ends failed; any other task's failure stops the
+    /// mission, as `stop`. A site engineer's robot held in one room
+    /// plasters the others and names the room it left.
+    #[default]
+    NextRoom,
     /// The mission stops, failed; the operator's commands are still taken,
     /// and `resume` tries the failed task again.
-    #[default]
     Stop,
     /// The mission goes on with its next task, and ends failed.
     Continue,
@@ -108,7 +116,7 @@ impl Default for SafetyConfig {
             blocked_timeout_s: 30.0,
             on_link_loss: LinkLossPolicy::Pause,
             link_timeout_s: 1.0,
-            on_task_failure: FailurePolicy::Stop,
+            on_task_failure: FailurePolicy::NextRoom,
             touch_timeout_s: 60.0,
         }
     }

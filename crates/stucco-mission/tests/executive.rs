@@ -3441,6 +3441,50 @@ fn a_failed_task_leaves_the_robot_ready_for_the_next_command() {
     assert!(matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("corner")));
 }
 
+/// By default, a task of one room's share of a job over rooms that fails
+/// gives that room up (the rest of its share is skipped: no mapping of a
+/// room the robot did not get to) and the job goes on with the next
+/// room, ending failed for it; with `on_task_failure = "stop"` it stops.
+#[test]
+fn a_failed_room_is_given_up_and_the_job_goes_on_with_the_next() {
+    let impossible_pass = TaskSpec::FollowWall {
+        wall: WallName::SOUTH,
+        standoff_m: 0.6,
+        from_m: 1.0,
+        to_m: 4.0,
+        speed_mps: 0.25,
+    };
+    let tasks = vec![impossible_pass, forward(0.3), forward(0.3)];
+    let shares = vec![Some(0), Some(0), Some(1)];
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut exec = executive(tasks.clone(), true).with_rooms(shares.clone());
+    let events = run(&mut exec, &mut robot, 10.0, |_, _| Vec::new());
+    assert!(matches!(exec.status()[0], TaskStatus::Failed { .. }));
+    assert_eq!(
+        exec.status()[1..],
+        [TaskStatus::Skipped, TaskStatus::Done],
+        "{:?}",
+        kinds(&events)
+    );
+    assert!(matches!(exec.mode(), MissionMode::Failed { reason } if reason.contains("corner")));
+    assert!(
+        robot.pose.x > 1.7,
+        "the next room's task drove: {:?}",
+        robot.pose
+    );
+
+    let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
+    let mut cfg = config(true);
+    cfg.safety.on_task_failure = FailurePolicy::Stop;
+    let mut exec = Executive::new(cfg, tasks).with_rooms(shares);
+    run(&mut exec, &mut robot, 10.0, |_, _| Vec::new());
+    assert_eq!(
+        exec.status()[1..],
+        [TaskStatus::Pending, TaskStatus::Pending]
+    );
+    assert!(matches!(exec.mode(), MissionMode::Failed { .. }));
+}
+
 /// A million commands at 1,000 a second: the ids remembered for retries
 /// stay those within their deadlines (10 s ahead here), never all.
 #[test]

@@ -282,6 +282,7 @@ impl Executive {
         self.tasks.insert(at, spec);
         self.status.insert(at, TaskStatus::Pending);
         self.scripted.insert(at, false);
+        self.rooms.insert(at, None);
         self.waiting = std::mem::take(&mut self.waiting)
             .into_iter()
             .map(|(i, id)| (if i >= at { i + 1 } else { i }, id))

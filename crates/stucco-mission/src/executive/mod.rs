@@ -189,6 +189,9 @@ pub struct Executive {
     /// True for the tasks of the mission file (a checkpoint keeps those),
     /// false for the operator's.
     scripted: Vec<bool>,
+    /// The share of a job over rooms each task is of (one room's going
+    /// there, mapping it, plastering it), for [`FailurePolicy::NextRoom`].
+    rooms: Vec<Option<usize>>,
     /// The telecommands taken and their replies, while a retry may come.
     ledger: Ledger,
     /// How the scripted mission ended (failed or aborted) while the
@@ -235,6 +238,7 @@ impl Executive {
             touch: None,
             continue_asked: false,
             scripted: vec![true; n],
+            rooms: vec![None; n],
             ledger: Ledger::default(),
             closed: None,
             failed_task: None,
@@ -254,6 +258,18 @@ impl Executive {
             dt: 0.0,
             thaw: None,
         }
+    }
+
+    /// The same executive with `rooms[k]` the share of a job over rooms
+    /// task `k` is of, when it is (one room's going there, mapping it,
+    /// plastering it: [`FailurePolicy::NextRoom`] gives up what is left of
+    /// a share when one of its tasks fails); tasks beyond `rooms` are of
+    /// none.
+    pub fn with_rooms(mut self, rooms: Vec<Option<usize>>) -> Self {
+        for (k, room) in rooms.into_iter().enumerate().take(self.rooms.len()) {
+            self.rooms[k] = room;
+        }
+        self
     }
 
     /// Tells the executive whether the operator's link is up (their
@@ -564,8 +580,9 @@ impl Executive {
     /// The task under way fails for `failure`. An operator's task fails
     /// alone: the robot stands ready for the next command. A scripted
     /// task stops the mission, or not, as the failsafe's `on_task_failure`
-    /// says; with nothing under way (an e-stop, a bumper with nobody
-    /// there), the mission fails.
+    /// says (with `next_room`, a room's share of a job over rooms is
+    /// given up and the job goes on); with nothing under way (an e-stop,
+    /// a bumper with nobody there), the mission fails.
     fn fail(&mut self, now: Stamp, failure: TaskFailure) {
         let reason = failure.to_string();
         let index = self.active.as_ref().map(|a| a.index);
@@ -587,12 +604,33 @@ impl Executive {
         // Touching something, or the e-stop, with nobody there ends the
         // mission whatever the policy.
         let unattended_stop = matches!(failure, TaskFailure::EStop | TaskFailure::Bumper);
+        let room = index.and_then(|k| self.rooms[k]);
         let stops = match scripted {
             _ if unattended_stop => true,
             Some(false) => false,
-            Some(true) => self.config.safety.on_task_failure == FailurePolicy::Stop,
+            Some(true) => match self.config.safety.on_task_failure {
+                FailurePolicy::Stop => true,
+                FailurePolicy::Continue => false,
+                // No room is reached from where the robot does not
+                // know it is.
+                FailurePolicy::NextRoom => room.is_none() || failure == TaskFailure::EstimateLost,
+            },
             None => true,
         };
+        if !stops
+            && self.config.safety.on_task_failure == FailurePolicy::NextRoom
+            && let Some(room) = room
+        {
+            // The room is given up: what is left of it would start where
+            // its share did not get the robot (mapping the room it is in
+            // as another, plastering a room not mapped).
+            for k in 0..self.tasks.len() {
+                if self.rooms[k] == Some(room) && self.status[k] == TaskStatus::Pending {
+                    self.status[k] = TaskStatus::Skipped;
+                    self.emit(now, EventKind::TaskSkipped { task: k });
+                }
+            }
+        }
         let failed = MissionMode::Failed {
             reason: reason.clone(),
         };
