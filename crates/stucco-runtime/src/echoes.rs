@@ -55,6 +55,9 @@ struct Kept {
     at: Point2<f64>,
     seen: Stamp,
     moving: bool,
+    /// Touched by the bumper: kept past its time while the robot's rear
+    /// axle stays this near it, m (0: not touched).
+    near_m: f64,
 }
 
 impl EchoMemory {
@@ -83,7 +86,8 @@ impl EchoMemory {
         let fan = Fan::of(scan);
         self.cells.retain(|_, k| {
             let keep_s = if k.moving { MOVING_KEEP_S } else { KEEP_S };
-            if scan.stamp.seconds_since(k.seen) > keep_s || (k.at - centre).norm() > RADIUS_M {
+            let off = (k.at - centre).norm();
+            if (scan.stamp.seconds_since(k.seen) > keep_s && off > k.near_m) || off > RADIUS_M {
                 return false;
             }
             // Kept before its wall was known (or better known).
@@ -109,6 +113,7 @@ impl EchoMemory {
                     at,
                     seen: scan.stamp,
                     moving,
+                    near_m: 0.0,
                 },
             );
         }
@@ -124,10 +129,17 @@ impl EchoMemory {
     }
 
     /// Something the bumper touched at `at` (room frame, seen at
-    /// `stamp`): kept as the echo of something moving, [`MOVING_KEEP_S`],
-    /// and out of view until the next scan tells otherwise.
-    pub fn touched(&mut self, stamp: Stamp, pose: &Pose2, at: &[Point2<f64>]) {
+    /// `stamp`, the robot at `pose`): kept as the echo of something
+    /// moving, out of view until a scan tells otherwise, and for
+    /// [`MOVING_KEEP_S`] — or for as long as the robot stays within
+    /// `away_m` further of it than it was. Behind the robot nothing tells
+    /// that what it touched has gone: forgotten while the robot stood by,
+    /// someone cornered behind it was pushed again every
+    /// [`MOVING_KEEP_S`] until the touches failed the job, the task never
+    /// held long enough to go elsewhere.
+    pub fn touched(&mut self, stamp: Stamp, pose: &Pose2, at: &[Point2<f64>], away_m: f64) {
         let to_robot = pose.inverse();
+        let centre = Point2::new(pose.x, pose.y);
         for &p in at {
             let key = ((p.x / CELL_M).floor() as i64, (p.y / CELL_M).floor() as i64);
             self.cells.insert(
@@ -136,6 +148,7 @@ impl EchoMemory {
                     at: p,
                     seen: stamp,
                     moving: true,
+                    near_m: (p - centre).norm() + away_m,
                 },
             );
             self.unseen.push(to_robot.transform_point(&p));
