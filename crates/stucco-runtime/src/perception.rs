@@ -151,7 +151,13 @@ fn own_walls(est: &Estimate, band_m: f64) -> OwnWalls {
                 .iter()
                 .filter(|d| d.wall == name)
                 .map(|d| {
-                    let half = 0.5 * d.width_m.unwrap_or(0.0) + band + 3.0 * d.sigma_m;
+                    // The opening as far as its place is known: an echo
+                    // within the band of the wall beside it is the wall's
+                    // (widened by the band, one 3 cm off a jamb and 5 cm
+                    // into a hall, the laser's noise, was kept as
+                    // something standing, and held a robot backing past
+                    // the doorway until its task failed).
+                    let half = 0.5 * d.width_m.unwrap_or(0.0) + 3.0 * d.sigma_m;
                     [d.position_m - half, d.position_m + half]
                 })
                 .collect();
@@ -1626,6 +1632,43 @@ mod tests {
             drive(&mut robot, 0.0, 0.0);
         }
         robot.perception().floor_obstacles()
+    }
+
+    /// An echo of the wall just beside a doorway, within the laser's
+    /// noise of the wall, is placed on the wall; one in the opening is
+    /// not (someone standing in the doorway).
+    #[test]
+    #[allow(clippy::expect_used)]
+    fn an_echo_beside_a_doorway_is_the_walls() {
+        // A hall 8 × 1.2 m, a door 0.9 m wide in its south wall at 3.55 m.
+        let est = Estimate {
+            stamp: Stamp::ZERO,
+            pose: Pose2::new(3.0, 0.6, 0.0),
+            position_sigma_m: 0.002,
+            heading_sigma_rad: 0.001,
+            room_m: [8.0, 1.2],
+            room_sigma_m: [0.002, 0.002],
+            corners: Vec::new(),
+            walls_seen: vec![100; 4],
+            walls_sigma_m: Vec::new(),
+            doors: vec![DoorEstimate {
+                wall: WallName::SOUTH,
+                position_m: 3.55,
+                width_m: Some(0.9),
+                sigma_m: 0.002,
+                plan_door: None,
+            }],
+            height_m: 2.6,
+            windows: Vec::new(),
+            obstacles: Vec::new(),
+            room: None,
+        };
+        let walls = own_walls(&est, WALL_BAND_SIGMAS * 0.02);
+        // 3 cm short of the jamb, 5 cm into the hall: the laser's noise.
+        let on = walls.place(&Point2::new(3.07, 0.05)).expect("the wall's");
+        assert!(on.y.abs() < 1e-9 && (on.x - 3.07).abs() < 1e-9, "{on:?}");
+        // In the opening.
+        assert!(walls.place(&Point2::new(3.2, 0.05)).is_none());
     }
 
     /// A room with a notch whose short walls the robot has not seen (their
