@@ -102,6 +102,8 @@ pub struct Walker {
     /// How far they stand off their path, stepped out of the robot's way,
     /// m (room frame).
     aside: nalgebra::Vector2<f64>,
+    /// How long they have stood aside with the robot still near, s.
+    aside_s: f64,
 }
 
 /// A person walking toward the robot stops this far from its body (the
@@ -117,6 +119,9 @@ const MAKE_WAY_M: f64 = 0.3;
 const BACK_TO_PATH_M: f64 = 1.0;
 /// The bearings a person may step out of the robot's way on.
 const MAKE_WAY_BEARINGS: usize = 16;
+/// Stood aside this long with the robot still near, a person walks on
+/// beside their path, the way along it that leads off the robot, s.
+const WALK_ON_S: f64 = 4.0;
 
 impl Walker {
     /// The person's legs and torso where they are now.
@@ -155,7 +160,11 @@ impl Walker {
     /// comes at them nearer than [`MAKE_WAY_M`] (backing, it does not see
     /// them) they step away from, where `free` (a place a person may stand
     /// on) lets them, and they go back to their path once it is
-    /// [`BACK_TO_PATH_M`] off.
+    /// [`BACK_TO_PATH_M`] off. Stood aside [`WALK_ON_S`] with the robot
+    /// still near (it waits for them: they stand in its field), they walk
+    /// on beside their path, whichever way along it takes them off the
+    /// robot, as people do: standing by it, someone who stepped aside in a
+    /// hall held a robot there until its task failed.
     fn walk_to(
         &mut self,
         t_s: f64,
@@ -199,10 +208,40 @@ impl Walker {
                 // Back to the path once the robot is off, straight.
                 let back = self.aside.norm().min(step);
                 let to = here - self.aside.normalize() * back;
-                if gap_at(&here) >= BACK_TO_PATH_M && gap_at(&to) >= YIELD_M && free(&to) {
-                    self.aside -= self.aside.normalize() * back;
-                    if self.aside.norm() < 1e-9 {
-                        self.aside = nalgebra::Vector2::zeros();
+                if gap_at(&here) >= BACK_TO_PATH_M {
+                    self.aside_s = 0.0;
+                    if gap_at(&to) >= YIELD_M && free(&to) {
+                        self.aside -= self.aside.normalize() * back;
+                        if self.aside.norm() < 1e-9 {
+                            self.aside = nalgebra::Vector2::zeros();
+                        }
+                    }
+                    return;
+                }
+                self.aside_s += dt;
+                if self.aside_s > WALK_ON_S {
+                    // On beside the path, off the robot: the way they were
+                    // going, else back.
+                    let beside = |walked: f64| {
+                        let p = self.pose_along(walked).position();
+                        Point2::new(p.x + self.aside.x, p.y + self.aside.y)
+                    };
+                    let gap_here = gap_at(&here);
+                    let on = [self.way, -self.way].into_iter().find(|&way| {
+                        let to = beside(self.walked_m + way * step);
+                        free(&to) && gap_at(&to) > gap_here
+                    });
+                    if let Some(way) = on {
+                        self.way = way;
+                        self.walked_m += way * step;
+                    } else if gap_at(&to) >= MAKE_WAY_M && free(&to) {
+                        // Walled in beside it (stepped into a doorway):
+                        // back to the path, still clear of the body, and
+                        // off along it from there.
+                        self.aside -= self.aside.normalize() * back;
+                        if self.aside.norm() < 1e-9 {
+                            self.aside = nalgebra::Vector2::zeros();
+                        }
                     }
                 }
                 return;
@@ -321,6 +360,7 @@ impl Scene {
                     way: 1.0,
                     waited_s: 0.0,
                     aside: nalgebra::Vector2::zeros(),
+                    aside_s: 0.0,
                 }
             })
             .collect();

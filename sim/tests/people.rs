@@ -109,3 +109,62 @@ fn a_person_the_robot_backs_at_steps_out_of_its_way() {
     let p = sim.truth().people[0];
     assert!((p.y - 1.5).abs() < 1e-6, "{p:?}");
 }
+
+/// A person a robot backed at along a hall, who stepped out of its way
+/// (back along the hall: it is too narrow to pass), walks on when the
+/// robot then stays (it waits for them: they stand in its field), the way
+/// along their path that leads off it; they do not stand by it for good.
+#[test]
+fn a_person_stood_aside_by_a_robot_that_stays_walks_on() {
+    let world = |seed: u64| {
+        let text = format!(
+            "name = \"hall\"\nseed = {seed}\n[robot]\nat = [4.0, 0.6]\nheading_deg = 0.0\n\
+             [[room]]\nname = \"hall\"\ncorners = [[0.0, 0.0], [8.0, 0.0], [8.0, 1.2], [0.0, 1.2]]\n\
+             [[person]]\npath = [[0.5, 0.6], [7.5, 0.6]]\nspeed_mps = 0.8\n"
+        );
+        WorldSpec::parse(&text, "hall").unwrap()
+    };
+    // The first seed whose person starts west of the robot walking east,
+    // at its back.
+    let mut sim = (1..100)
+        .map(|seed| Simulator::new(&world(seed), SimConfig::default(), None))
+        .find(|sim| {
+            let p = sim.truth().people[0];
+            p.x < 2.5 && p.theta.cos() > 0.0
+        })
+        .unwrap();
+    let near = |sim: &Simulator| {
+        let (p, r) = (sim.truth().people[0], sim.truth().drive.pose);
+        (p.x - r.x).hypot(p.y - r.y)
+    };
+    // Standing till they wait at its back, then backing at them a
+    // second, then standing.
+    sim.command(DriveCommand::STOP);
+    let mut k = 0;
+    while near(&sim) > 1.0 {
+        sim.advance(0.05);
+        k += 1;
+        assert!(k < 400, "never came near: {:?}", sim.truth().people[0]);
+    }
+    sim.command(DriveCommand {
+        speed_mps: -0.3,
+        steer_rad: 0.0,
+    });
+    for _ in 0..20 {
+        sim.advance(0.05);
+    }
+    sim.command(DriveCommand::STOP);
+    let mut stood_by = 0;
+    for _ in 0..600 {
+        let r = sim.advance(0.05);
+        assert!(!r.bumper, "touched at {:?}", sim.truth().people[0]);
+        if near(&sim) < 0.9 {
+            stood_by += 1;
+        }
+    }
+    assert!(
+        (stood_by as f64) * 0.05 < 15.0,
+        "stood by the robot {:.1} s of 30",
+        stood_by as f64 * 0.05
+    );
+}
