@@ -381,11 +381,27 @@ impl PlasterRun {
     }
 
     /// The wall line of station `k`'s lane, with the distance from it the
-    /// robot's line runs at (middle lanes: the south wall's line).
+    /// robot's line runs at (middle lanes: the south wall's line). A
+    /// wall's station stands at the tool's standoff, or farther out where
+    /// what stands before the wall leaves the body no room there.
     pub fn lane_line(&self, k: usize) -> Option<(WallLine, f64)> {
         let s = self.plan.stations.get(k)?;
         Some(match s.lane {
-            Lane::Wall(w) => (self.plan.room.wall(w)?, self.plan.tool.robot_standoff_m),
+            Lane::Wall(w) => {
+                let line = self.plan.room.wall(w)?;
+                let standoff = self.plan.tool.robot_standoff_m;
+                let d = line.inward.dot(&(s.base.position().coords - line.origin));
+                // The tool's own, where the base stands on it but for
+                // rounding.
+                (
+                    line,
+                    if (d - standoff).abs() < 1e-6 {
+                        standoff
+                    } else {
+                        d
+                    },
+                )
+            }
             // A middle lane runs east: along the x axis, at its y.
             Lane::Middle(_) => (
                 WallLine::between([0.0, 0.0], [self.plan.room.size_m[0], 0.0]),

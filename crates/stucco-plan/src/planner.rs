@@ -776,6 +776,9 @@ impl Floor {
 
 /// Step of the search for stations' bases, m.
 const BASE_STEP_M: f64 = 0.01;
+/// Step out from a wall of the standoffs its stations' bases are searched
+/// at, beyond the tool's, m.
+const STANDOFF_STEP_M: f64 = 0.05;
 
 impl Planner<'_> {
     /// True when the robot can stand at `pose`: its body, grown by the
@@ -802,11 +805,63 @@ impl Planner<'_> {
         }) && self.floor.reaches([pose.x, pose.y])
     }
 
-    /// The stations along wall `w`, far end first.
+    /// The stations along wall `w`, far end first: on its lane at the
+    /// tool's standoff, and where no base there reaches a stretch of the
+    /// wall (furniture against it, or a corner, leaves no room for the
+    /// body), from farther out, as far as the arm reaches the wall from,
+    /// the nearest first. What stands before the wall limits the tool only
+    /// where it stands: a wardrobe 60 cm deep kept the whole lane's body
+    /// away from a metre of wall either side of it.
     fn wall(&self, w: WallName, surface: &Surface) -> Vec<Station> {
         let tool = self.tool;
         let Some(line) = self.room.wall(w) else {
             return Vec::new();
+        };
+        let [length, _] = surface.size_m();
+        let gap = tool.surface_gap_m;
+        let mut left = vec![[gap, length - gap]];
+        let mut stations = Vec::new();
+        let farthest = tool.wall_standoff_m + tool.planned_arm_m()[1];
+        let mut standoff = tool.robot_standoff_m;
+        while !left.is_empty() && standoff <= farthest + 1e-9 {
+            let (mine, reached) = self.wall_at(w, surface, standoff, &left);
+            stations.extend(mine);
+            // The next strokes a whole spacing on from these, as within
+            // one station's (half a spacing on, the bands overlapped and
+            // laid the coat double there).
+            let half = 0.5 * tool.stroke_spacing_m();
+            for r in reached {
+                cut_spans(&mut left, [r[0] - half, r[1] + half]);
+            }
+            // Stretches too short for a stroke are done.
+            left.retain(|l| l[1] - l[0] > 0.5 * tool.stroke_spacing_m());
+            standoff += STANDOFF_STEP_M;
+        }
+        // Far end first, as each lane's stations are driven.
+        let heading = line.heading_wall_left();
+        let sgn = line
+            .along
+            .dot(&nalgebra::Vector2::new(heading.cos(), heading.sin()));
+        let at = |s: &Station| sgn * line.along.dot(&(s.base.position().coords - line.origin));
+        stations.sort_by(|a, b| at(b).total_cmp(&at(a)));
+        stations
+    }
+
+    /// The stations along wall `w` with their bases `standoff` m from it,
+    /// spraying the stretches of it in `within` (along it, m), far end
+    /// first; and the stretches their strokes cover. Farther out than the
+    /// tool's standoff, nothing between the body and the wall is sprayed
+    /// over (the laser sees what stands there, not how high).
+    fn wall_at(
+        &self,
+        w: WallName,
+        surface: &Surface,
+        standoff: f64,
+        within: &[[f64; 2]],
+    ) -> (Vec<Station>, Vec<[f64; 2]>) {
+        let tool = self.tool;
+        let Some(line) = self.room.wall(w) else {
+            return (Vec::new(), Vec::new());
         };
         let heading = line.heading_wall_left();
         let sgn = line
@@ -814,7 +869,7 @@ impl Planner<'_> {
             .dot(&nalgebra::Vector2::new(heading.cos(), heading.sin()));
         let [length, height] = surface.size_m();
         let pose_at = |u: f64| {
-            let p = line.point(u, tool.robot_standoff_m);
+            let p = line.point(u, standoff);
             Pose2::new(p.x, p.y, heading)
         };
         // Positions t = sgn·u of the feasible bases.
@@ -837,8 +892,18 @@ impl Planner<'_> {
             tool.lift_m[0].max(tool.skirting_m - tool.ramp_m()),
             tool.lift_m[1].min(height - gap),
         ];
-        // Nozzle along the wall: union of the reaches, as intervals.
-        let mut spans: Vec<[f64; 2]> = feasible.iter().filter_map(|&t| reach_of(t)).collect();
+        // Nozzle along the wall: union of the reaches, as intervals,
+        // within the stretches asked for.
+        let mut spans: Vec<[f64; 2]> = feasible
+            .iter()
+            .filter_map(|&t| reach_of(t))
+            .flat_map(|r| {
+                within.iter().filter_map(move |l| {
+                    let (a, b) = (r[0].max(l[0]), r[1].min(l[1]));
+                    (b > a).then_some([a, b])
+                })
+            })
+            .collect();
         spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
         let mut merged: Vec<[f64; 2]> = Vec::new();
         for s in spans {
@@ -848,8 +913,10 @@ impl Planner<'_> {
             }
         }
         // Obstacles between the wall and the body: the nozzle cannot go
-        // below their tops there.
-        let corridor = tool.robot_standoff_m - self.body.half_width_m;
+        // below their tops there (farther out than the tool's standoff,
+        // nowhere there).
+        let corridor = standoff - self.body.half_width_m;
+        let nearest = standoff <= tool.robot_standoff_m + 1e-9;
         let low_blocks: Vec<([f64; 2], f64)> = self
             .room
             .obstacles
@@ -878,10 +945,20 @@ impl Planner<'_> {
                 let (u0, u1) = u
                     .iter()
                     .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-                (d < corridor).then_some(([u0, u1], o.height_m + tool.clearance_m))
+                let top = if nearest {
+                    o.height_m + tool.clearance_m
+                } else {
+                    f64::MAX
+                };
+                (d < corridor).then_some(([u0, u1], top))
             })
             .collect();
         let strokes = self.wall_strokes(&merged, surface, lift, &low_blocks);
+        let half = 0.5 * tool.stroke_spacing_m();
+        let reached: Vec<[f64; 2]> = strokes
+            .iter()
+            .map(|(u, _, _)| [u - half, u + half])
+            .collect();
         // Stations, far end first: each covers the farthest strokes left.
         let mut left: Vec<(f64, Vec<[f64; 2]>, f64)> = strokes;
         left.sort_by(|a, b| (sgn * b.0).total_cmp(&(sgn * a.0)));
@@ -914,7 +991,7 @@ impl Planner<'_> {
                 passes: vec![self.wall_pass(surface.id, &mine)],
             });
         }
-        stations
+        (stations, reached)
     }
 
     /// The strokes of a wall: `(u, pieces of v sprayed, speed)`.
@@ -1775,6 +1852,74 @@ mod tests {
         );
         assert!(
             (s.unreachable_m2 - p.unreachable.iter().map(|u| u.area_m2).sum::<f64>()).abs() < 0.05
+        );
+    }
+
+    #[test]
+    fn a_wall_beside_a_wardrobe_is_reached_from_farther_out() {
+        // A wardrobe 0.6 m deep and 2 m high against the south wall, u
+        // 0.9–1.9 m: at the tool's standoff the body (0.95 m long, and its
+        // clearance) cannot stand between it and the west wall, nor reach
+        // round it; farther out it stands beside the wardrobe, and the arm
+        // reaches the wall between, never over the wardrobe.
+        let mut r = room([5.0, 4.0], 2.6, Vec::new());
+        let wardrobe = Obstacle {
+            min_m: [0.9, 0.0],
+            max_m: [1.9, 0.6],
+            height_m: 2.0,
+        };
+        r.obstacles = vec![wardrobe];
+        let p = make(&r);
+        check_moves(&p);
+        let t = tool();
+        let body = Body::of(&VehicleSpec::default());
+        let south = WallName::SOUTH;
+        let mut farther = 0;
+        for s in &p.stations {
+            let [lo, hi] = room_box(&s.base, body.x_m, [-body.half_width_m, body.half_width_m]);
+            let c = t.clearance_m - 1e-9;
+            assert!(
+                hi[0] <= wardrobe.min_m[0] - c
+                    || lo[0] >= wardrobe.max_m[0] + c
+                    || lo[1] >= wardrobe.max_m[1] + c,
+                "{:?} meets the wardrobe",
+                s.base
+            );
+            if s.lane == Lane::Wall(south) && s.base.y > t.robot_standoff_m + 1e-6 {
+                farther += 1;
+                assert!(s.base.y <= t.wall_standoff_m + t.planned_arm_m()[1] + 1e-9);
+            }
+        }
+        assert!(farther > 0, "no station beside the wardrobe");
+        for (_, pass) in p
+            .passes()
+            .filter(|(_, p)| p.surface == SurfaceId::Wall(south))
+        {
+            for m in pass.moves.iter().filter(|m| m.spray) {
+                let u = m.from_m[0];
+                assert!(
+                    u <= wardrobe.min_m[0] || u >= wardrobe.max_m[0],
+                    "sprays over the wardrobe: {m:?}"
+                );
+            }
+        }
+        // What is left of the south wall is what the wardrobe hides, and
+        // the tool's margins beside it.
+        let left = p
+            .unreachable
+            .iter()
+            .find(|u| u.surface == SurfaceId::Wall(south))
+            .expect("the wall behind the wardrobe");
+        assert!(
+            left.bounds.u_m[0] > 0.7 && left.bounds.u_m[1] < 2.1,
+            "{left:?}"
+        );
+        // The coat even over what the plan reaches, the stations near and
+        // far out meeting without a double band.
+        let s = predicted_score(&p);
+        assert!(
+            s.wall_coverage_pct >= 99.9 && s.ceiling_coverage_pct >= 99.9,
+            "{s:?}"
         );
     }
 
