@@ -211,10 +211,7 @@ impl Walker {
                 if gap_at(&here) >= BACK_TO_PATH_M {
                     self.aside_s = 0.0;
                     if gap_at(&to) >= YIELD_M && free(&to) {
-                        self.aside -= self.aside.normalize() * back;
-                        if self.aside.norm() < 1e-9 {
-                            self.aside = nalgebra::Vector2::zeros();
-                        }
+                        self.step_back(back);
                     }
                     return;
                 }
@@ -238,10 +235,7 @@ impl Walker {
                         // Walled in beside it (stepped into a doorway):
                         // back to the path, still clear of the body, and
                         // off along it from there.
-                        self.aside -= self.aside.normalize() * back;
-                        if self.aside.norm() < 1e-9 {
-                            self.aside = nalgebra::Vector2::zeros();
-                        }
+                        self.step_back(back);
                     }
                 }
                 return;
@@ -258,6 +252,14 @@ impl Walker {
         }
         self.waited_s = 0.0;
         self.walked_m = next;
+    }
+
+    /// A step of `back` m toward their path from where they stood aside.
+    fn step_back(&mut self, back: f64) {
+        self.aside -= self.aside.normalize() * back;
+        if self.aside.norm() < 1e-9 {
+            self.aside = nalgebra::Vector2::zeros();
+        }
     }
 
     /// Position and heading `walked_m` along the path from where they

@@ -3324,6 +3324,18 @@ fn absurd_targets_are_refused_at_acceptance() {
     assert_eq!(out.acks[0].reply, Reply::Accepted);
 }
 
+/// A pass along the south wall that starts at its corner: it fails at
+/// once.
+fn impossible_pass() -> TaskSpec {
+    TaskSpec::FollowWall {
+        wall: WallName::SOUTH,
+        standoff_m: 0.6,
+        from_m: 1.0,
+        to_m: 4.0,
+        speed_mps: 0.25,
+    }
+}
+
 /// An operator's task that fails is answered `failed` and the robot
 /// stands ready: the next command runs. A scripted task's failure stops
 /// the mission (the default policy), the operator's commands are still
@@ -3331,13 +3343,7 @@ fn absurd_targets_are_refused_at_acceptance() {
 /// `on_task_failure = "continue"` the mission goes on and ends failed.
 #[test]
 fn a_failed_task_leaves_the_robot_ready_for_the_next_command() {
-    let impossible_pass = TaskSpec::FollowWall {
-        wall: WallName::SOUTH,
-        standoff_m: 0.6,
-        from_m: 1.0,
-        to_m: 4.0,
-        speed_mps: 0.25,
-    };
+    let impossible_pass = impossible_pass();
     // The operator's task fails alone.
     let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));
     let mut exec = standing_by();
@@ -3447,13 +3453,7 @@ fn a_failed_task_leaves_the_robot_ready_for_the_next_command() {
 /// room, ending failed for it; with `on_task_failure = "stop"` it stops.
 #[test]
 fn a_failed_room_is_given_up_and_the_job_goes_on_with_the_next() {
-    let impossible_pass = TaskSpec::FollowWall {
-        wall: WallName::SOUTH,
-        standoff_m: 0.6,
-        from_m: 1.0,
-        to_m: 4.0,
-        speed_mps: 0.25,
-    };
+    let impossible_pass = impossible_pass();
     let tasks = vec![impossible_pass, forward(0.3), forward(0.3)];
     let shares = vec![Some(0), Some(0), Some(1)];
     let mut robot = Robot::at(Pose2::new(1.5, 1.5, 0.0));

@@ -810,8 +810,8 @@ impl Planner<'_> {
     /// wall (furniture against it, or a corner, leaves no room for the
     /// body), from farther out, as far as the arm reaches the wall from,
     /// the nearest first. What stands before the wall limits the tool only
-    /// where it stands: a wardrobe 60 cm deep kept the whole lane's body
-    /// away from a metre of wall either side of it.
+    /// where it stands: between a corner and a wardrobe, a stretch shorter
+    /// than the body and its clearance was never planned.
     fn wall(&self, w: WallName, surface: &Surface) -> Vec<Station> {
         let tool = self.tool;
         let Some(line) = self.room.wall(w) else {
@@ -823,18 +823,18 @@ impl Planner<'_> {
         let mut stations = Vec::new();
         let farthest = tool.wall_standoff_m + tool.planned_arm_m()[1];
         let mut standoff = tool.robot_standoff_m;
+        let half = 0.5 * tool.stroke_spacing_m();
         while !left.is_empty() && standoff <= farthest + 1e-9 {
             let (mine, reached) = self.wall_at(w, surface, standoff, &left);
             stations.extend(mine);
             // The next strokes a whole spacing on from these, as within
             // one station's (half a spacing on, the bands overlapped and
             // laid the coat double there).
-            let half = 0.5 * tool.stroke_spacing_m();
             for r in reached {
                 cut_spans(&mut left, [r[0] - half, r[1] + half]);
             }
             // Stretches too short for a stroke are done.
-            left.retain(|l| l[1] - l[0] > 0.5 * tool.stroke_spacing_m());
+            left.retain(|l| l[1] - l[0] > half);
             standoff += STANDOFF_STEP_M;
         }
         // Far end first, as each lane's stations are driven.

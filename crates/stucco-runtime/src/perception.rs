@@ -1634,6 +1634,34 @@ mod tests {
         robot.perception().floor_obstacles()
     }
 
+    /// The robot known to 2 mm in the middle of a room `room_m` (its
+    /// `corners`, none for the rectangle) whose size and walls are known
+    /// to `room_sigma_m` and `walls_sigma_m`, every wall seen, no door.
+    fn known_in(
+        room_m: [f64; 2],
+        room_sigma_m: [f64; 2],
+        corners: Vec<[f64; 2]>,
+        walls_sigma_m: Vec<f64>,
+    ) -> Estimate {
+        let walls = if corners.is_empty() { 4 } else { corners.len() };
+        Estimate {
+            stamp: Stamp::ZERO,
+            pose: Pose2::new(room_m[0] / 2.0, room_m[1] / 2.0, 0.0),
+            position_sigma_m: 0.002,
+            heading_sigma_rad: 0.001,
+            room_m,
+            room_sigma_m,
+            corners,
+            walls_seen: vec![100; walls],
+            walls_sigma_m,
+            doors: Vec::new(),
+            height_m: 2.6,
+            windows: Vec::new(),
+            obstacles: Vec::new(),
+            room: None,
+        }
+    }
+
     /// An echo of the wall just beside a doorway, within the laser's
     /// noise of the wall, is placed on the wall; one in the opening is
     /// not (someone standing in the doorway).
@@ -1642,15 +1670,6 @@ mod tests {
     fn an_echo_beside_a_doorway_is_the_walls() {
         // A hall 8 × 1.2 m, a door 0.9 m wide in its south wall at 3.55 m.
         let est = Estimate {
-            stamp: Stamp::ZERO,
-            pose: Pose2::new(3.0, 0.6, 0.0),
-            position_sigma_m: 0.002,
-            heading_sigma_rad: 0.001,
-            room_m: [8.0, 1.2],
-            room_sigma_m: [0.002, 0.002],
-            corners: Vec::new(),
-            walls_seen: vec![100; 4],
-            walls_sigma_m: Vec::new(),
             doors: vec![DoorEstimate {
                 wall: WallName::SOUTH,
                 position_m: 3.55,
@@ -1658,10 +1677,7 @@ mod tests {
                 sigma_m: 0.002,
                 plan_door: None,
             }],
-            height_m: 2.6,
-            windows: Vec::new(),
-            obstacles: Vec::new(),
-            room: None,
+            ..known_in([8.0, 1.2], [0.002, 0.002], Vec::new(), Vec::new())
         };
         let walls = own_walls(&est, WALL_BAND_SIGMAS * 0.02);
         // 3 cm short of the jamb, 5 cm into the hall: the laser's noise.
@@ -1694,22 +1710,7 @@ mod tests {
         let mut walls_sigma_m = vec![0.003; corners.len()];
         walls_sigma_m[3] = 0.6;
         walls_sigma_m[5] = 0.6;
-        let est = Estimate {
-            stamp: Stamp::ZERO,
-            pose: Pose2::new(3.5, 3.0, 0.0),
-            position_sigma_m: 0.002,
-            heading_sigma_rad: 0.001,
-            room_m: [7.0, 6.0],
-            room_sigma_m: [0.003, 0.6],
-            corners,
-            walls_seen: vec![100; 8],
-            walls_sigma_m,
-            doors: Vec::new(),
-            height_m: 2.6,
-            windows: Vec::new(),
-            obstacles: Vec::new(),
-            room: None,
-        };
+        let est = known_in([7.0, 6.0], [0.003, 0.6], corners, walls_sigma_m);
         let on_floor = OnFloor::of(&est).expect("known where it is");
         // Half a metre off the south wall, in the room's middle.
         assert!(on_floor.holds(&Point2::new(3.8, 0.5)));
