@@ -322,6 +322,28 @@ impl<'a> Space<'a> {
         reach
     }
 
+    /// True when the floor the way over it reaches from the path's start
+    /// holds the body's middle all along `points` (rear axle places, each
+    /// stretch driven heading along it): a disc as wide as the body
+    /// keeps off the walls and what stands on the floor there. What
+    /// sweeps past that at a corner turned on the move is not checked.
+    pub(crate) fn path_open(&self, points: &[[f64; 2]]) -> bool {
+        let heading = |a: [f64; 2], b: [f64; 2]| (b[1] - a[1]).atan2(b[0] - a[0]);
+        let (Some(&a), Some(&b)) = (points.first(), points.get(1)) else {
+            return false;
+        };
+        let reach = self.reach(&Pose2::new(a[0], a[1], heading(a, b)));
+        points.windows(2).all(|w| {
+            let (a, b) = (Vector2::from(w[0]), Vector2::from(w[1]));
+            let h = heading(w[0], w[1]);
+            let n = ((b - a).norm() / REACH_CELL_M).ceil().max(1.0) as usize;
+            (0..=n).all(|k| {
+                let p = a + (b - a) * (k as f64 / n as f64);
+                reach.at(&self.middle(&Pose2::new(p.x, p.y, h))).is_finite()
+            })
+        })
+    }
+
     /// True when the body (with its field's sides) at `p` heading `theta`
     /// is inside the room or its doorways and off every obstacle.
     fn body_clear(&self, p: &Vector2<f64>, theta: f64) -> bool {

@@ -170,6 +170,22 @@ impl PlasterRun {
         true
     }
 
+    /// Puts station `k` at the cursor, before the current one (no clear
+    /// way reaches that from where the robot stands; one reaches `k`).
+    /// False when the current one is begun (its passes done would be
+    /// sprayed again) or `k` is not after it.
+    pub fn bring_forward(&mut self, k: usize) -> bool {
+        let at = self.cursor.station;
+        let begun = self.cursor.pass > 0 || self.cursor.step > 0 || self.resume_s > 0.0;
+        if begun || k <= at || k >= self.plan.stations.len() {
+            return false;
+        }
+        let station = self.plan.stations.remove(k);
+        self.plan.stations.insert(at, station);
+        self.station_changed();
+        true
+    }
+
     /// Puts `plan` in place of the one carried out, from its start.
     pub fn replan(&mut self, plan: Plan) {
         *self = PlasterRun::new(plan, Cursor::default());

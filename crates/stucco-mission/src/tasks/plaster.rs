@@ -135,7 +135,7 @@ impl Task for Plaster {
             run.phase = Phase::Surveying;
         } else {
             self.ways.queue.extend(next_station_way(
-                config,
+                cx,
                 clearance,
                 &mut run,
                 &est.pose,
@@ -234,7 +234,7 @@ impl Task for Plaster {
                     unreachable_m2: plan.unreachable_m2(),
                 });
                 run.replan(plan);
-                let way = next_station_way(config, clearance, run, &est.pose, speed);
+                let way = next_station_way(cx, clearance, run, &est.pose, speed);
                 self.ways.queue.extend(way);
                 cx.effects.tool = park;
                 TaskStep::Drive(DriveCommand::STOP)
@@ -418,7 +418,7 @@ impl Task for Plaster {
                         cx.effects.checkpoint = true;
                         cx.effects.tool = park;
                         self.ways
-                            .replace(next_station_way(config, clearance, run, &est.pose, speed));
+                            .replace(next_station_way(cx, clearance, run, &est.pose, speed));
                         run.phase = Phase::Moving;
                         return TaskStep::Drive(DriveCommand::STOP);
                     }
@@ -507,7 +507,7 @@ impl Task for Plaster {
                                 _ => None,
                             })
                             .unwrap_or(est.pose);
-                        way.extend(next_station_way(config, clearance, run, &from, speed));
+                        way.extend(next_station_way(cx, clearance, run, &from, speed));
                         run.phase = Phase::Moving;
                         self.ways.queue.extend(way);
                         cx.effects.tool = park;
@@ -552,13 +552,26 @@ impl Task for Plaster {
                 return true;
             }
         }
-        // So on a leg of a loop driven corner to corner.
+        // So on a leg of a loop driven corner to corner; planned again as
+        // often as it may be and held still (someone the robot backs
+        // toward, cornered at a corridor's end), the corner is left out
+        // and the survey goes on with the next: the job failed there.
         if blocked_s > REPLAN_AFTER_S
             && let Some(legs) = self.legs.as_mut()
-            && let Some(q) = legs.again(config, est)
         {
-            self.ways.replace(q);
-            return true;
+            if let Some(q) = legs.again(config, est) {
+                self.ways.replace(q);
+                return true;
+            }
+            if self
+                .run
+                .as_ref()
+                .is_some_and(|r| matches!(r.phase, Phase::Surveying))
+            {
+                self.ways
+                    .replace(legs.next(config, est).unwrap_or_default());
+                return true;
+            }
         }
         // A plastering survey's loop turned on the move that something
         // blocks (it runs near the furniture it goes round): the survey
@@ -622,7 +635,7 @@ impl Task for Plaster {
             }
             let clearance = pivot_clearance(config);
             way.extend(next_station_way(
-                config,
+                cx,
                 clearance,
                 run,
                 &from,
@@ -940,14 +953,16 @@ fn plan_room(
 /// false when the way found does not keep the body and the field clear
 /// as the map holds them: it is then driven all the same, the supervisor
 /// watching (a way not tried at all, none being needed or found, is
-/// empty and true).
+/// empty and true). Without `search`, no manoeuvre is searched for (a
+/// search that finds none spends its whole budget, seconds of it): the
+/// plain way is clear or not.
 fn station_way(
     config: &ExecutiveConfig,
     floor: &Floor,
     run: &PlasterRun,
     k: usize,
     from: &Pose2,
-    speed: f64,
+    (speed, search): (f64, bool),
 ) -> (Vec<Behaviour>, bool) {
     let (Some(station), Some((line, dist))) = (run.plan.stations.get(k), run.lane_line(k)) else {
         return (Vec::new(), true);
@@ -980,7 +995,7 @@ fn station_way(
     let at = line.along.dot(&(entry.position().coords - line.origin));
     let on = line.point(at, dist);
     let onto = Pose2::new(on.x, on.y, entry.theta);
-    let moves = (line.inward.dot(&(entry.position().coords - line.origin)) - dist > 0.01)
+    let moves = (search && line.inward.dot(&(entry.position().coords - line.origin)) - dist > 0.01)
         .then(|| space.manoeuvre(from, &onto))
         .flatten();
     let mut way = match moves {
@@ -998,6 +1013,9 @@ fn station_way(
     if space.way_cost(from, &way).is_some() {
         return (way, true);
     }
+    if !search {
+        return (way, false);
+    }
     match space.manoeuvre(from, &goal) {
         Some((_, moves)) => (manoeuvre::behaviours(gains, &moves, speed), true),
         None => (way, false),
@@ -1005,17 +1023,43 @@ fn station_way(
 }
 
 /// The way from `from` to the plan's next station; notes in `run`
-/// whether it was found clear.
+/// whether it was found clear. Where no clear way reaches it from
+/// `from`, the first later station whose plain way is clear comes first
+/// (a `station_deferred` event for the one put after it): the robot
+/// drives a way it does not know clear only when no station left has
+/// one it knows without a search. Driven at first, the way to a room's
+/// far side took it in between two tables, where it could turn no more
+/// and every station after was given up.
 fn next_station_way(
-    config: &ExecutiveConfig,
+    cx: &mut TaskCx<'_>,
     floor_clearance: f64,
     run: &mut PlasterRun,
     from: &Pose2,
     speed: f64,
 ) -> Vec<Behaviour> {
+    let config = cx.config;
+    let station = run.cursor.station;
     let floor = floor_of(run, &config.vehicle, floor_clearance);
-    let (way, clear) = station_way(config, &floor, run, run.cursor.station, from, speed);
-    run.way_unchecked = !clear;
+    let (way, clear) = station_way(config, &floor, run, station, from, (speed, true));
+    if clear {
+        run.way_unchecked = false;
+        return way;
+    }
+    let later = (station + 1..run.plan.stations.len()).find_map(|k| {
+        let (way, clear) = station_way(config, &floor, run, k, from, (speed, false));
+        clear.then_some((k, way))
+    });
+    if let Some((k, way)) = later
+        && run.bring_forward(k)
+    {
+        cx.emit(EventKind::StationDeferred {
+            task: cx.index,
+            station,
+        });
+        run.way_unchecked = false;
+        return way;
+    }
+    run.way_unchecked = true;
     way
 }
 
@@ -1202,4 +1246,89 @@ fn travel_s(from: &ToolCommand, to: &ToolCommand, speed_mps: f64) -> f64 {
 
 fn surface_name(s: SurfaceId) -> String {
     s.name().to_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::executive::Event;
+    use crate::tasks::Effects;
+    use stucco_core::Stamp;
+
+    /// The robot in the middle of a 5 × 3 m room, known well, nothing on
+    /// its floor.
+    fn in_the_room() -> Estimate {
+        Estimate {
+            stamp: Stamp::ZERO,
+            pose: Pose2::new(2.5, 1.5, 0.0),
+            position_sigma_m: 0.003,
+            heading_sigma_rad: 0.001,
+            room_m: [5.0, 3.0],
+            room_sigma_m: [0.002; 2],
+            corners: Vec::new(),
+            walls_seen: vec![100; 4],
+            walls_sigma_m: Vec::new(),
+            doors: Vec::new(),
+            height_m: 2.6,
+            windows: Vec::new(),
+            obstacles: Vec::new(),
+            room: None,
+        }
+    }
+
+    /// Where no clear way reaches the plan's next station (something the
+    /// map holds stands where its body would), the first later station
+    /// whose plain way is clear goes first and the robot drives to it,
+    /// not at the first: driven at, held there, it was given up in 2 s,
+    /// and so each after it from where the robot was held.
+    #[test]
+    #[allow(clippy::expect_used)]
+    fn a_station_with_a_clear_way_comes_before_one_without() {
+        let config = ExecutiveConfig {
+            spray: Some(SprayTool::default()),
+            ..ExecutiveConfig::driving(VehicleSpec::default())
+        };
+        let est = in_the_room();
+        let walls = walls_or_all(None, &est);
+        let plan =
+            plan_room(&config, config.spray.as_ref(), (&walls, true, None), &est).expect("a plan");
+        let first = plan.stations[0].base;
+        let mut run = PlasterRun::new(plan, Cursor::default());
+        // Something on the floor where the first station's body stands.
+        let ahead = first * Pose2::new(0.3, 0.0, 0.0);
+        run.plan.room.obstacles.push(stucco_plan::Obstacle {
+            min_m: [ahead.x - 0.1, ahead.y - 0.1],
+            max_m: [ahead.x + 0.1, ahead.y + 0.1],
+            height_m: 1.0,
+        });
+        let mut events: Vec<Event> = Vec::new();
+        let mut effects = Effects {
+            tool: ToolCommand::default(),
+            checkpoint: false,
+            enter_room: None,
+        };
+        let mut cx = TaskCx {
+            now: Stamp::ZERO,
+            dt: 0.02,
+            started: Stamp::ZERO,
+            index: 0,
+            est: &est,
+            config: &config,
+            hazard: None,
+            answered: false,
+            events: &mut events,
+            effects: &mut effects,
+        };
+        let way = next_station_way(&mut cx, pivot_clearance(&config), &mut run, &est.pose, 0.5);
+        assert!(!run.way_unchecked && !way.is_empty());
+        assert_ne!(run.plan.stations[0].base, first);
+        assert_eq!(run.plan.stations[1].base, first);
+        assert!(matches!(
+            events[..],
+            [Event {
+                kind: EventKind::StationDeferred { station: 0, .. },
+                ..
+            }]
+        ));
+    }
 }

@@ -5,6 +5,7 @@ use super::ways::{planned_way, way};
 use super::{Behaviours, MAX_REPLANS, REPLAN_AFTER_S, Task, TaskCx, TaskFailure, TaskStep, Thaw};
 use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::{EventKind, ExecutiveConfig};
+use crate::manoeuvre::Space;
 use crate::model::{Estimate, WallGeometry, anchor_wall, wall_sigma, walls_or_all};
 use crate::task::WallName;
 use crate::views::{NoView, Sight, Spent, View, next_view};
@@ -686,13 +687,31 @@ pub(crate) fn survey_way(
     } else {
         [clearance, ends]
     };
+    // The loop, where a clear way reaches its start (driven blind to a
+    // start beyond two tables, the robot was held between them, where it
+    // could turn no more) and its line keeps inside the room (laid in
+    // the box of an L, it ran through the notch's walls). What stands on
+    // the floor near it the loop meets on the move, and goes on corner
+    // to corner from there (`SURVEY_BLOCKED_S`).
     if let Some(corners) = survey_rect(est, margins, half, SURVEY_LOOP_MIN_M) {
         let path = closed(&corners);
         let (a, b) = (path[0], path[1]);
         let start = Pose2::new(a[0], a[1], (b[1] - a[1]).atan2(b[0] - a[0]));
-        let mut way = self::way(config, est, &est.pose, &start, speed);
-        way.push(Behaviour::path(&config.gains, path, speed));
-        return (way, None);
+        let walls = Space::new(
+            est.room_m,
+            &est.corners,
+            &est.doors,
+            &[],
+            vehicle,
+            &config.safety,
+            speed,
+        );
+        if let Some((_, mut way)) = planned_way(config, est, &est.pose, &start, speed)
+            && walls.path_open(&path)
+        {
+            way.push(Behaviour::path(&config.gains, path, speed));
+            return (way, None);
+        }
     }
     (Vec::new(), survey_legs(vehicle, est, speed))
 }
@@ -870,6 +889,54 @@ fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use stucco_core::Stamp;
+
+    /// The robot at `pose` in a room of `corners` (its box from the
+    /// origin), known well, nothing on its floor.
+    fn in_room(corners: &[[f64; 2]], pose: Pose2) -> Estimate {
+        let xs = corners.iter().map(|c| c[0]).fold(0.0, f64::max);
+        let ys = corners.iter().map(|c| c[1]).fold(0.0, f64::max);
+        Estimate {
+            stamp: Stamp::ZERO,
+            pose,
+            position_sigma_m: 0.005,
+            heading_sigma_rad: 0.001,
+            room_m: [xs, ys],
+            room_sigma_m: [0.005; 2],
+            corners: corners.to_vec(),
+            walls_seen: vec![100; corners.len()],
+            walls_sigma_m: vec![0.005; corners.len()],
+            doors: Vec::new(),
+            height_m: 2.6,
+            windows: Vec::new(),
+            obstacles: Vec::new(),
+            room: None,
+        }
+    }
+
+    /// A plastering survey's loop is laid in the room's box: in an L
+    /// room it ran through the notch's walls. Where its line leaves the
+    /// room (or no clear way reaches its start), the survey goes corner to
+    /// corner, each leg the planned way.
+    #[test]
+    fn a_survey_loop_through_a_wall_is_driven_corner_to_corner() {
+        let config = ExecutiveConfig::driving(VehicleSpec::default());
+        let clearance = super::super::pivot_clearance(&config);
+        let rectangle = [[0.0, 0.0], [7.0, 0.0], [7.0, 6.0], [0.0, 6.0]];
+        let l_room = [
+            [0.0, 0.0],
+            [7.0, 0.0],
+            [7.0, 3.5],
+            [3.5, 3.5],
+            [3.5, 6.0],
+            [0.0, 6.0],
+        ];
+        let pose = Pose2::new(2.0, 2.0, 0.0);
+        let (way, legs) = survey_way(&config, clearance, &in_room(&rectangle, pose), 0.2);
+        assert!(legs.is_none() && way.last().is_some_and(|b| b.name() == "path"));
+        let (way, legs) = survey_way(&config, clearance, &in_room(&l_room, pose), 0.2);
+        assert!(legs.is_some() && way.is_empty(), "{way:?}");
+    }
 
     #[test]
     fn the_floor_map_has_changed_when_a_piece_comes_goes_or_moves_not_when_it_jitters() {
