@@ -188,6 +188,30 @@ pub fn walls_of_room(corners: &[[f64; 2]], room_m: [f64; 2]) -> Vec<(WallName, W
         .collect()
 }
 
+/// For the crate's tests: the robot at `pose` in a room `room_m` (the box
+/// of `corners`, none for the rectangle), every wall seen and the pose
+/// known to 3 mm, no door, window or furniture.
+#[cfg(test)]
+pub(crate) fn known_room(room_m: [f64; 2], corners: &[[f64; 2]], pose: Pose2) -> Estimate {
+    let walls = if corners.is_empty() { 4 } else { corners.len() };
+    Estimate {
+        stamp: stucco_core::Stamp::ZERO,
+        pose,
+        position_sigma_m: 0.003,
+        heading_sigma_rad: 0.001,
+        room_m,
+        room_sigma_m: [0.002; 2],
+        corners: corners.to_vec(),
+        walls_seen: vec![100; walls],
+        walls_sigma_m: Vec::new(),
+        doors: Vec::new(),
+        height_m: 2.6,
+        windows: Vec::new(),
+        obstacles: Vec::new(),
+        room: None,
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {

@@ -361,24 +361,14 @@ impl Supervisor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use stucco_core::{Pose2, Stamp};
+    use stucco_core::Pose2;
 
     fn estimate(sigma: f64) -> Estimate {
         Estimate {
-            stamp: Stamp::ZERO,
-            pose: Pose2::new(1.0, 1.0, 0.0),
             position_sigma_m: sigma,
-            heading_sigma_rad: 0.001,
-            room_m: [5.0, 3.0],
             room_sigma_m: [0.01; 2],
-            corners: Vec::new(),
             walls_seen: vec![0; 4],
-            walls_sigma_m: Vec::new(),
-            doors: Vec::new(),
-            height_m: 2.6,
-            windows: Vec::new(),
-            obstacles: Vec::new(),
-            room: None,
+            ..crate::model::known_room([5.0, 3.0], &[], Pose2::new(1.0, 1.0, 0.0))
         }
     }
 

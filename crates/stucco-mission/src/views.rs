@@ -318,26 +318,17 @@ const HEADING_STEP_RAD: f64 = std::f64::consts::PI / 6.0;
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use stucco_core::{Stamp, VehicleSpec};
+    use stucco_core::VehicleSpec;
 
     fn room(corners: &[[f64; 2]], obstacles: Vec<Obstacle>, pose: Pose2) -> Estimate {
         let xs = corners.iter().map(|c| c[0]).fold(0.0, f64::max);
         let ys = corners.iter().map(|c| c[1]).fold(0.0, f64::max);
         Estimate {
-            stamp: Stamp::ZERO,
-            pose,
             position_sigma_m: 0.01,
-            heading_sigma_rad: 0.001,
-            room_m: [xs, ys],
             room_sigma_m: [0.01; 2],
-            corners: corners.to_vec(),
             walls_seen: vec![0; corners.len()],
-            walls_sigma_m: Vec::new(),
-            doors: Vec::new(),
-            height_m: 2.6,
-            windows: Vec::new(),
             obstacles,
-            room: None,
+            ..crate::model::known_room([xs, ys], corners, pose)
         }
     }
 

@@ -1255,27 +1255,6 @@ mod tests {
     use crate::tasks::Effects;
     use stucco_core::Stamp;
 
-    /// The robot in the middle of a 5 × 3 m room, known well, nothing on
-    /// its floor.
-    fn in_the_room() -> Estimate {
-        Estimate {
-            stamp: Stamp::ZERO,
-            pose: Pose2::new(2.5, 1.5, 0.0),
-            position_sigma_m: 0.003,
-            heading_sigma_rad: 0.001,
-            room_m: [5.0, 3.0],
-            room_sigma_m: [0.002; 2],
-            corners: Vec::new(),
-            walls_seen: vec![100; 4],
-            walls_sigma_m: Vec::new(),
-            doors: Vec::new(),
-            height_m: 2.6,
-            windows: Vec::new(),
-            obstacles: Vec::new(),
-            room: None,
-        }
-    }
-
     /// Where no clear way reaches the plan's next station (something the
     /// map holds stands where its body would), the first later station
     /// whose plain way is clear goes first and the robot drives to it,
@@ -1288,7 +1267,7 @@ mod tests {
             spray: Some(SprayTool::default()),
             ..ExecutiveConfig::driving(VehicleSpec::default())
         };
-        let est = in_the_room();
+        let est = crate::model::known_room([5.0, 3.0], &[], Pose2::new(2.5, 1.5, 0.0));
         let walls = walls_or_all(None, &est);
         let plan =
             plan_room(&config, config.spray.as_ref(), (&walls, true, None), &est).expect("a plan");

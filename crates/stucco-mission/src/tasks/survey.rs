@@ -889,30 +889,7 @@ fn closed(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use stucco_core::Stamp;
-
-    /// The robot at `pose` in a room of `corners` (its box from the
-    /// origin), known well, nothing on its floor.
-    fn in_room(corners: &[[f64; 2]], pose: Pose2) -> Estimate {
-        let xs = corners.iter().map(|c| c[0]).fold(0.0, f64::max);
-        let ys = corners.iter().map(|c| c[1]).fold(0.0, f64::max);
-        Estimate {
-            stamp: Stamp::ZERO,
-            pose,
-            position_sigma_m: 0.005,
-            heading_sigma_rad: 0.001,
-            room_m: [xs, ys],
-            room_sigma_m: [0.005; 2],
-            corners: corners.to_vec(),
-            walls_seen: vec![100; corners.len()],
-            walls_sigma_m: vec![0.005; corners.len()],
-            doors: Vec::new(),
-            height_m: 2.6,
-            windows: Vec::new(),
-            obstacles: Vec::new(),
-            room: None,
-        }
-    }
+    use crate::model::known_room;
 
     /// A plastering survey's loop is laid in the room's box: in an L
     /// room it ran through the notch's walls. Where its line leaves the
@@ -932,9 +909,19 @@ mod tests {
             [0.0, 6.0],
         ];
         let pose = Pose2::new(2.0, 2.0, 0.0);
-        let (way, legs) = survey_way(&config, clearance, &in_room(&rectangle, pose), 0.2);
+        let (way, legs) = survey_way(
+            &config,
+            clearance,
+            &known_room([7.0, 6.0], &rectangle, pose),
+            0.2,
+        );
         assert!(legs.is_none() && way.last().is_some_and(|b| b.name() == "path"));
-        let (way, legs) = survey_way(&config, clearance, &in_room(&l_room, pose), 0.2);
+        let (way, legs) = survey_way(
+            &config,
+            clearance,
+            &known_room([7.0, 6.0], &l_room, pose),
+            0.2,
+        );
         assert!(legs.is_some() && way.is_empty(), "{way:?}");
     }
 
