@@ -1739,6 +1739,49 @@ fn a_station_where_the_position_stays_loose_is_put_last_and_done_at_the_end() {
     assert_eq!(started, plan.stations.len() + 1);
 }
 
+/// The position too loose to spray wherever the robot stands at the
+/// first station (the far end of a long corridor, its end wall behind
+/// the robot): the station is put last, loose again there, given up, and
+/// the rest of the job is plastered and done, the station's area
+/// reported unreachable.
+#[test]
+fn a_station_where_the_position_stays_loose_for_good_is_given_up() {
+    let (mut exec, mut robot) = plastering_alone();
+    let (mut events, mut plan) = (Vec::<Event>::new(), None);
+    for _ in 0..(6000.0 / DT) as usize {
+        plan = plan.or_else(|| exec.plaster_plan().cloned());
+        let near = plan
+            .as_ref()
+            .and_then(|p| p.stations.first())
+            .is_some_and(|s| (s.base.x - robot.pose.x).hypot(s.base.y - robot.pose.y) < 0.3);
+        robot.position_sigma = if near { 0.015 } else { 0.003 };
+        let out = ask(&mut exec, &robot, Seen::default());
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    let k = kinds(&events);
+    assert_eq!(*exec.mode(), MissionMode::Done, "{k:?}");
+    let plan = plan.expect("a plan");
+    let given_up: Vec<(usize, f64)> = events
+        .iter()
+        .filter_map(|e| match e.kind {
+            EventKind::StationGivenUp {
+                station,
+                unreachable_m2,
+                ..
+            } => Some((station, unreachable_m2)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(given_up.len(), 1, "{k:?}");
+    assert!(given_up[0].1 > 0.0, "{given_up:?}");
+    let passes: usize = plan.stations[1..].iter().map(|s| s.passes.len()).sum();
+    assert_eq!(k.iter().filter(|k| *k == "pass_done").count(), passes);
+}
+
 /// Held on the last stretch onto a station it already stands on within
 /// what the gantry has spare (something stays in the field ahead: a wall
 /// the station stands nearer than the field's margin), the robot takes
