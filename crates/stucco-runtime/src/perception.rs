@@ -7,7 +7,9 @@
 
 use crate::{EchoMemory, Movers, RecentScans};
 use nalgebra::{DVector, Matrix2, Point2, SVector};
-use stucco_core::{EncoderSample, Pose2, Readings, RobotSpec, Stamp, TOOL_CAMERA, Twist2};
+use stucco_core::{
+    DriveCommand, EncoderSample, Pose2, Readings, RobotSpec, Stamp, TOOL_CAMERA, Twist2,
+};
 use stucco_mission::{
     DoorEstimate, Estimate, FloorPlan, WallGeometry, WallName, WindowEstimate, room_walls,
     wall_sigma,
@@ -48,6 +50,9 @@ pub struct Perception {
     /// The body's faces in the robot's frame: behind, ahead and either
     /// side of the rear axle, m.
     body: [f64; 3],
+    /// The vehicle's wheelbase, m: how far the front wheel steers the
+    /// rear axle's turn.
+    wheelbase_m: f64,
     /// How far the laser's echoes of a wall scatter off it (4 σ of its
     /// range noise: 3 σ was measured too few, a robot at a station sees a
     /// wall's stretch in tens of thousands of beams), m.
@@ -554,6 +559,7 @@ impl Perception {
             echoes: EchoMemory::default(),
             recent: RecentScans::new(robot.laser.range_sigma_m),
             movers: Movers::default(),
+            wheelbase_m: vehicle.wheelbase_m,
             body: [
                 vehicle.rear_overhang_m,
                 vehicle.length_m - vehicle.rear_overhang_m,
@@ -728,29 +734,23 @@ impl Perception {
         self.echoes.unseen()
     }
 
-    /// The bumper touched something while the robot drove `forward` (or
-    /// backed): the body's face that way is kept as the echo of
-    /// something moving just beyond it, so the field holds the robot from
-    /// pushing on into it — behind, where the laser does not look,
-    /// nothing else would (a person who walked up behind a robot about to
-    /// back was pushed every half second, the bumper's hold over). It is
-    /// kept until the robot has driven a body's length off it (or a scan
-    /// sees through it).
-    pub fn touched(&mut self, forward: bool) {
+    /// The bumper touched something while the robot drove `cmd`: the
+    /// body's leading edge for that motion — each point of its outline
+    /// that moves outward — is kept
+    /// as the echo of something moving just beyond it, so the field holds
+    /// the robot from pushing on into it. Backing, that is the rear face;
+    /// turning, the corners that swing out too (the rear one backwards,
+    /// where the laser does not look). Behind the robot nothing else would
+    /// hold it (a person who walked up behind a robot about to back was
+    /// pushed every half second). It is kept until the robot has driven a
+    /// body's length off it (or a scan sees through it).
+    pub fn touched(&mut self, cmd: &DriveCommand) {
         let (x, _) = self.room.ekf.now();
         let pose = Pose2::new(x[0], x[1], x[2]);
-        let [rear, front, half] = self.body;
-        let face = if forward {
-            front + crate::echoes::CELL_M
-        } else {
-            -rear - crate::echoes::CELL_M
-        };
-        let across = (2.0 * half / crate::echoes::CELL_M).ceil() as usize;
-        let at: Vec<Point2<f64>> = (0..=across)
-            .map(|k| {
-                let y = -half + 2.0 * half * k as f64 / across as f64;
-                pose.transform_point(&Point2::new(face, y))
-            })
+        let [rear, front, _] = self.body;
+        let at: Vec<Point2<f64>> = leading_edge(&self.body, self.wheelbase_m, cmd)
+            .iter()
+            .map(|p| pose.transform_point(p))
             .collect();
         self.echoes.touched(self.now, &pose, &at, rear + front);
     }
@@ -1457,6 +1457,55 @@ impl Perception {
     }
 }
 
+/// How far beyond the body's face a touch is kept, m: what the bumper
+/// touched stands within one control period's travel of the face (the
+/// body stops short of it), and the echo must lie within the shortest
+/// field the supervisor checks (at creep speed with no margin, 7 mm) for
+/// the robot to be held at once. Kept a grid cell out (5 cm), the demo's
+/// 3 cm margin let a robot creeping back into a chair's corner push it
+/// every half second until the touches failed the job.
+const TOUCH_GAP_M: f64 = 0.005;
+
+/// The points just beyond the outline of the body `[rear, front, half]`
+/// (robot frame, rear axle at the origin) that it moves into driving
+/// `cmd` on a front wheel `wheelbase_m` ahead of the rear axle: every
+/// [`crate::echoes::CELL_M`] along each face, [`TOUCH_GAP_M`] out, where
+/// the face moves outward. The bumper tells that it touched, not where:
+/// this is everywhere the body can have pushed into something.
+fn leading_edge(body: &[f64; 3], wheelbase_m: f64, cmd: &DriveCommand) -> Vec<Point2<f64>> {
+    use crate::echoes::CELL_M;
+    let [rear, front, half] = *body;
+    if cmd.speed_mps == 0.0 {
+        return Vec::new();
+    }
+    // Per metre of the front wheel's travel: the rear axle's advance and
+    // the turn.
+    let sign = cmd.speed_mps.signum();
+    let forward = sign * cmd.steer_rad.cos();
+    let turn = sign * cmd.steer_rad.sin() / wheelbase_m;
+    let speed =
+        |p: Point2<f64>, out: [f64; 2]| (forward - turn * p.y) * out[0] + turn * p.x * out[1];
+    let along = |from: Point2<f64>, to: Point2<f64>, out: [f64; 2]| {
+        let n = ((to - from).norm() / CELL_M).ceil().max(1.0) as usize;
+        (0..=n).map(move |k| (from + (to - from) * (k as f64 / n as f64), out))
+    };
+    let corners = [
+        Point2::new(front, -half),
+        Point2::new(front, half),
+        Point2::new(-rear, half),
+        Point2::new(-rear, -half),
+    ];
+    let outs = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
+    let outline: Vec<(Point2<f64>, [f64; 2])> = (0..4)
+        .flat_map(|k| along(corners[k], corners[(k + 1) % 4], outs[k]))
+        .collect();
+    outline
+        .into_iter()
+        .filter(|&(p, out)| speed(p, out) > 0.0)
+        .map(|(p, out)| p + nalgebra::Vector2::new(out[0], out[1]) * TOUCH_GAP_M)
+        .collect()
+}
+
 /// The windows of `view`, wall by wall: those the camera on the body
 /// found, their edges along the wall fused with those the camera on the
 /// tool saw where it saw them too, each edge weighed by how tightly its
@@ -1601,10 +1650,19 @@ mod tests {
 
     /// [`at_the_apartments_start_seeded`] in the apartment as `edit`
     /// leaves it.
-    #[allow(clippy::expect_used)]
     fn at_the_apartments_start_with(
         seed: u64,
         edit: impl FnOnce(&mut WorldSpec),
+    ) -> (Robot<Simulator>, Pose2) {
+        at_the_apartments_start_kept(seed, edit, stucco_mission::SafetyConfig::default())
+    }
+
+    /// [`at_the_apartments_start_with`], the robot kept by `safety`.
+    #[allow(clippy::expect_used)]
+    fn at_the_apartments_start_kept(
+        seed: u64,
+        edit: impl FnOnce(&mut WorldSpec),
+        safety: stucco_mission::SafetyConfig,
     ) -> (Robot<Simulator>, Pose2) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../sim/worlds/apartment.toml");
@@ -1621,7 +1679,7 @@ mod tests {
         let sim = Simulator::new(&world, cfg, Some(seed));
         let perception =
             Perception::new(&spec, x0, [0.01, 0.01], sim.now()).expect("valid settings");
-        (idle_robot(sim, perception, &spec), start)
+        (idle_robot_kept(sim, perception, &spec, safety), start)
     }
 
     /// What the robot standing at the apartment's start maps on the
@@ -1879,8 +1937,26 @@ mod tests {
 
     /// A robot on `sim` with `perception` whose executive idles.
     fn idle_robot(sim: Simulator, perception: Perception, spec: &RobotSpec) -> Robot<Simulator> {
+        idle_robot_kept(
+            sim,
+            perception,
+            spec,
+            stucco_mission::SafetyConfig::default(),
+        )
+    }
+
+    /// [`idle_robot`] kept by `safety`.
+    fn idle_robot_kept(
+        sim: Simulator,
+        perception: Perception,
+        spec: &RobotSpec,
+        safety: stucco_mission::SafetyConfig,
+    ) -> Robot<Simulator> {
         let idle = stucco_mission::Executive::new(
-            stucco_mission::ExecutiveConfig::driving(spec.vehicle.clone()),
+            stucco_mission::ExecutiveConfig {
+                safety,
+                ..stucco_mission::ExecutiveConfig::driving(spec.vehicle.clone())
+            },
             Vec::new(),
         );
         let limiter = stucco_control::Limiter::new(&spec.vehicle);
@@ -2134,6 +2210,16 @@ mod tests {
 
     /// The operator's `k`th jog backwards at 0.2 m/s for half a second.
     fn backing_jog(robot: &Robot<Simulator>, k: usize) -> stucco_core::Telecommand {
+        jog(robot, k, -0.2, 0.0)
+    }
+
+    /// A jog telecommand for half a second, the `k`th.
+    fn jog(
+        robot: &Robot<Simulator>,
+        k: usize,
+        speed_mps: f64,
+        steer_rad: f64,
+    ) -> stucco_core::Telecommand {
         let now = robot.now();
         stucco_core::Telecommand {
             id: format!("jog-{k}"),
@@ -2141,54 +2227,125 @@ mod tests {
             issued: now,
             deadline: now.offset_secs(1.0),
             command: stucco_core::Command::Jog {
-                speed_mps: -0.2,
-                steer_rad: 0.0,
+                speed_mps,
+                steer_rad,
                 ttl_s: 0.5,
             },
         }
     }
 
-    /// A jog backwards into someone standing behind the robot, where the
-    /// laser never looked: the bumper touches them once, and the robot is
-    /// then held from backing on into them, not let go to push again when
-    /// the bumper's hold is over, nor when an echo of someone moving would
-    /// be forgotten: the robot has not moved off them.
-    #[test]
+    /// Jogs at `speed_mps` with the wheel at `steer_rad`, the robot kept
+    /// by `safety`, into someone standing still at `at` in the start's
+    /// frame: the first period the bumper touched them, how many touches,
+    /// and how many periods it touched.
     #[allow(clippy::expect_used)]
-    fn a_robot_backing_into_someone_it_never_saw_touches_them_once() {
-        let behind = |start: &Pose2| {
-            let p = start.transform_point(&Point2::new(-0.7, 0.0));
-            stucco_sim::PersonSpec {
-                path: vec![[p.x, p.y], [p.x + 1e-3, p.y]],
-                speed_mps: 1e-3,
-            }
-        };
-        let (mut robot, _) = at_the_apartments_start_with(3, |w| {
-            let at = Pose2::new(
-                w.robot.at[0],
-                w.robot.at[1],
-                w.robot.heading_deg.to_radians(),
-            );
-            w.people = vec![behind(&at)];
-        });
-        let (mut touches, mut touching, mut first) = (0, false, None);
+    fn jog_into_someone(
+        at: Point2<f64>,
+        speed_mps: f64,
+        steer_rad: f64,
+        safety: stucco_mission::SafetyConfig,
+    ) -> (Option<usize>, usize, usize) {
+        let (mut robot, _) = at_the_apartments_start_kept(
+            3,
+            |w| {
+                let start = Pose2::new(
+                    w.robot.at[0],
+                    w.robot.at[1],
+                    w.robot.heading_deg.to_radians(),
+                );
+                let p = start.transform_point(&at);
+                w.people = vec![stucco_sim::PersonSpec {
+                    path: vec![[p.x, p.y], [p.x + 1e-3, p.y]],
+                    speed_mps: 1e-3,
+                }];
+            },
+            safety,
+        );
+        let (mut touches, mut touching, mut first, mut pushing) = (0, false, None, 0);
         for k in 0..((3.0 * crate::echoes::MOVING_KEEP_S) / DT_S) as usize {
             if k % 10 == 0 {
-                let jog = backing_jog(&robot, k);
+                let jog = jog(&robot, k, speed_mps, steer_rad);
                 robot.telecommands(&[jog]);
             }
             robot.tick(&[], false, &mut []).expect("no sink");
             robot.act(&mut []).expect("no sink");
             let bumper = robot.platform().truth().bumper;
+            pushing += usize::from(bumper);
             if bumper && !touching {
                 touches += 1;
                 first.get_or_insert(k);
             }
             touching = bumper;
         }
-        let first = first.expect("the robot backed into the person");
-        assert!(first < 200, "first touch after {first} periods");
-        assert_eq!(touches, 1, "pushed again");
+        (first, touches, pushing)
+    }
+
+    /// The default field and a site's tight one (3 cm ahead, 2 cm aside,
+    /// as the demo's).
+    fn fields() -> [stucco_mission::SafetyConfig; 2] {
+        [
+            stucco_mission::SafetyConfig::default(),
+            stucco_mission::SafetyConfig {
+                obstacle_margin_m: 0.03,
+                lateral_margin_m: 0.02,
+                ..stucco_mission::SafetyConfig::default()
+            },
+        ]
+    }
+
+    /// A jog backwards into someone standing behind the robot, where the
+    /// laser never looked: the bumper touches them once, and the robot is
+    /// then held from backing on into them, not let go to push again when
+    /// the bumper's hold is over, nor when an echo of someone moving would
+    /// be forgotten: the robot has not moved off them. With a tight field
+    /// too (the touch kept a grid cell out, a field of 3 cm let the robot
+    /// creep on into them).
+    #[test]
+    fn a_robot_backing_into_someone_it_never_saw_touches_them_once() {
+        for (k, safety) in fields().into_iter().enumerate() {
+            let (first, touches, pushing) =
+                jog_into_someone(Point2::new(-0.7, 0.0), -0.2, 0.0, safety);
+            let first = first.unwrap_or_else(|| panic!("field {k}: never touched"));
+            assert!(first < 200, "field {k}: first touch after {first} periods");
+            assert_eq!(touches, 1, "field {k}: pushed again");
+            assert!(pushing < 10, "field {k}: pushed on for {pushing} periods");
+        }
+    }
+
+    /// Where the bumper's touch is kept: the face driven into, and turning
+    /// on the spot the corners that swing out, the rear one too.
+    #[test]
+    fn a_touch_is_kept_on_the_body_s_leading_edge() {
+        let body = [0.15, 0.75, 0.31];
+        let edge = |speed_mps: f64, steer_rad: f64| {
+            leading_edge(
+                &body,
+                0.6,
+                &DriveCommand {
+                    speed_mps,
+                    steer_rad,
+                },
+            )
+        };
+        let ahead = edge(0.3, 0.0);
+        assert!(ahead.iter().all(|p| p.x > 0.75 && p.x < 0.76), "{ahead:?}");
+        assert!(ahead.iter().any(|p| p.y < -0.3) && ahead.iter().any(|p| p.y > 0.3));
+        let behind = edge(-0.3, 0.0);
+        assert!(
+            behind.iter().all(|p| p.x < -0.15 && p.x > -0.16),
+            "{behind:?}"
+        );
+        // Counter-clockwise on the spot: the front's left side, the
+        // front's right corner and the rear's left corner.
+        let turn = edge(0.3, std::f64::consts::FRAC_PI_2);
+        let rear_left = turn.iter().filter(|p| p.x < -0.15 && p.y > 0.0).count();
+        assert!(rear_left > 0, "{turn:?}");
+        assert!(turn.iter().any(|p| p.y > 0.31 && p.x > 0.6));
+        assert!(
+            turn.iter().all(|p| !(p.x < -0.15 && p.y < 0.0)),
+            "the rear's right corner swings in: {turn:?}"
+        );
+        assert!(edge(0.0, 0.3).is_empty());
     }
 
     /// A robot that turned its back on what it saw, jogged backwards, stops

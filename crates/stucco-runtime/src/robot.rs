@@ -225,7 +225,7 @@ impl<P: Platform> Robot<P> {
         self.perception.take(&readings, self.platform.now());
         self.bumper = readings.bumper;
         if readings.bumper && cmd.speed_mps != 0.0 {
-            self.perception.touched(cmd.speed_mps > 0.0);
+            self.perception.touched(&cmd);
         }
         (self.estimate, self.pose_covariance) = self.perception.mission_estimate_with_covariance();
         self.periods += 1;
