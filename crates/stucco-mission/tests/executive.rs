@@ -2626,6 +2626,50 @@ fn a_plaster_task_whose_stations_are_all_given_up_fails_saying_why() {
     }
 }
 
+/// Plastering the walls of a room whose floor the map holds taken along
+/// every wall, a metre deep: no station is planned, and the task fails
+/// saying so at once, never done.
+#[test]
+fn a_plaster_task_planned_no_station_fails_saying_why() {
+    let config = ExecutiveConfig {
+        spray: Some(stucco_plan::SprayTool::default()),
+        ..config(true)
+    };
+    let mut walls_only = plaster(false);
+    if let TaskSpec::Plaster { ceiling, .. } = &mut walls_only {
+        *ceiling = false;
+    }
+    let mut exec = Executive::new(config, vec![walls_only]);
+    let mut robot = Robot::at(Pose2::new(2.5, 1.5, 0.0));
+    let along = |min_m: [f64; 2], max_m: [f64; 2]| stucco_plan::Obstacle {
+        min_m,
+        max_m,
+        height_m: 2.0,
+    };
+    robot.floor = vec![
+        along([0.0, 0.0], [5.0, 1.0]),
+        along([0.0, 2.0], [5.0, 3.0]),
+        along([0.0, 0.0], [1.0, 3.0]),
+        along([4.0, 0.0], [5.0, 3.0]),
+    ];
+    let mut events = Vec::new();
+    for _ in 0..(60.0 / DT) as usize {
+        let out = ask(&mut exec, &robot, Seen::default());
+        events.extend(out.events);
+        robot.drive(out.drive);
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    assert_eq!(planned_stations(&events), 0);
+    match exec.failure() {
+        Some(stucco_mission::TaskFailure::NothingReachable { unreachable_m2 }) => {
+            assert!(*unreachable_m2 > 10.0, "{unreachable_m2}");
+        }
+        other => panic!("{other:?}: {:?}", exec.mode()),
+    }
+}
+
 /// A plaster task of only `walls` of the apartment's hall, no ceiling,
 /// run for at most `max_s` with the laser seeing the hall's walls: the
 /// executive at the end, the stations given up (as numbered when given

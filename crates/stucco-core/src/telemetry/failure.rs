@@ -147,6 +147,12 @@ pub enum TaskFailure {
         /// The plasterable area they were to reach, m².
         unreachable_m2: f64,
     },
+    /// `plaster`: the plan made on what the robot found has no station:
+    /// nowhere the robot can stand reaches any of the surface asked for.
+    NothingReachable {
+        /// The plasterable area asked for, all of it out of reach, m².
+        unreachable_m2: f64,
+    },
     /// `plaster`: a checkpoint's plan is missing.
     CheckpointPlanMissing {
         /// The station the checkpoint stopped at.
@@ -214,6 +220,7 @@ impl TaskFailure {
             TaskFailure::NoPlan => "no_plan",
             TaskFailure::Planning { .. } => "planning",
             TaskFailure::AllStationsGivenUp { .. } => "all_stations_given_up",
+            TaskFailure::NothingReachable { .. } => "nothing_reachable",
             TaskFailure::CheckpointPlanMissing { .. } => "checkpoint_plan_missing",
             TaskFailure::CheckpointPlanDiffers { .. } => "checkpoint_plan_differs",
             TaskFailure::NotFacingSurface { .. } => "not_facing_surface",
@@ -338,6 +345,11 @@ impl std::fmt::Display for TaskFailure {
                 f,
                 "plaster: no way reached any of its {stations} stations: nothing plastered \
                  ({unreachable_m2:.1} m² left unreachable)"
+            ),
+            TaskFailure::NothingReachable { unreachable_m2 } => write!(
+                f,
+                "plaster: no station reaches any of the surface from where the robot can \
+                 stand ({unreachable_m2:.1} m² unreachable)"
             ),
             TaskFailure::CheckpointPlanMissing { station } => write!(
                 f,

@@ -128,6 +128,12 @@ impl Task for Plaster {
             stations: run.plan.stations.len(),
             unreachable_m2: run.plan.unreachable_m2(),
         });
+        if !s.survey
+            && !resumed
+            && let Some(failure) = nothing_reachable(&run.plan)
+        {
+            return Err(failure);
+        }
         if s.survey && !resumed {
             let (way, corner_to_corner) = survey_way(config, clearance, est, s.survey_speed_mps);
             self.ways.queue.extend(way);
@@ -233,6 +239,9 @@ impl Task for Plaster {
                     stations: plan.stations.len(),
                     unreachable_m2: plan.unreachable_m2(),
                 });
+                if let Some(failure) = nothing_reachable(&plan) {
+                    return TaskStep::Failed(failure);
+                }
                 run.replan(plan);
                 let way = next_station_way(cx, clearance, run, &est.pose, speed);
                 self.ways.queue.extend(way);
@@ -1278,6 +1287,16 @@ fn travel_s(from: &ToolCommand, to: &ToolCommand, speed_mps: f64) -> f64 {
 
 fn surface_name(s: SurfaceId) -> String {
     s.name().to_owned()
+}
+
+/// A plan with no station though surface was asked for: the task fails
+/// saying so, never done (a room whose floor the map held all but where
+/// the robot stood was planned 0 stations, 66.6 m² unreachable, and the
+/// task reported done).
+fn nothing_reachable(plan: &Plan) -> Option<TaskFailure> {
+    let unreachable_m2 = plan.unreachable_m2();
+    (plan.stations.is_empty() && unreachable_m2 > 0.0)
+        .then_some(TaskFailure::NothingReachable { unreachable_m2 })
 }
 
 #[cfg(test)]
