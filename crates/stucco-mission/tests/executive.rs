@@ -1782,6 +1782,48 @@ fn a_station_where_the_position_stays_loose_for_good_is_given_up() {
     assert_eq!(k.iter().filter(|k| *k == "pass_done").count(), passes);
 }
 
+/// The position goes too loose to spray at the first station 5 s into
+/// its strokes, and stays so there: the rest of the station is given up
+/// after the timeout, and the other stations are plastered and the job
+/// done, not failed at the station begun.
+#[test]
+fn a_station_begun_where_the_position_goes_loose_for_good_is_given_up() {
+    let (mut exec, mut robot) = plastering_alone();
+    let (mut events, mut plan) = (Vec::<Event>::new(), None);
+    let (mut t, mut started) = (0.0, None);
+    for _ in 0..(6000.0 / DT) as usize {
+        plan = plan.or_else(|| exec.plaster_plan().cloned());
+        let near = plan
+            .as_ref()
+            .and_then(|p| p.stations.first())
+            .is_some_and(|s| (s.base.x - robot.pose.x).hypot(s.base.y - robot.pose.y) < 0.3);
+        let begun = started.is_some_and(|s: f64| t > s + 5.0);
+        robot.position_sigma = if near && begun { 0.015 } else { 0.003 };
+        let out = ask(&mut exec, &robot, Seen::default());
+        if out
+            .events
+            .iter()
+            .any(|e| matches!(e.kind, EventKind::StationStarted { station: 0, .. }))
+        {
+            started.get_or_insert(t);
+        }
+        events.extend(out.events);
+        robot.drive(out.drive);
+        t += DT;
+        if exec.mode().is_final() {
+            break;
+        }
+    }
+    let k = kinds(&events);
+    assert_eq!(*exec.mode(), MissionMode::Done, "{k:?}");
+    let plan = plan.expect("a plan");
+    let given_up = k.iter().filter(|k| *k == "station_given_up").count();
+    assert_eq!(given_up, 1, "{k:?}");
+    assert!(!k.iter().any(|k| k == "station_deferred"), "{k:?}");
+    let passes: usize = plan.stations[1..].iter().map(|s| s.passes.len()).sum();
+    assert_eq!(k.iter().filter(|k| *k == "pass_done").count(), passes);
+}
+
 /// Held on the last stretch onto a station it already stands on within
 /// what the gantry has spare (something stays in the field ahead: a wall
 /// the station stands nearer than the field's margin), the robot takes
