@@ -1496,11 +1496,8 @@ fn leading_edge(body: &[f64; 3], wheelbase_m: f64, cmd: &DriveCommand) -> Vec<Po
         Point2::new(-rear, -half),
     ];
     let outs = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
-    let outline: Vec<(Point2<f64>, [f64; 2])> = (0..4)
+    (0..4)
         .flat_map(|k| along(corners[k], corners[(k + 1) % 4], outs[k]))
-        .collect();
-    outline
-        .into_iter()
         .filter(|&(p, out)| speed(p, out) > 0.0)
         .map(|(p, out)| p + nalgebra::Vector2::new(out[0], out[1]) * TOUCH_GAP_M)
         .collect()
@@ -2210,16 +2207,6 @@ mod tests {
 
     /// The operator's `k`th jog backwards at 0.2 m/s for half a second.
     fn backing_jog(robot: &Robot<Simulator>, k: usize) -> stucco_core::Telecommand {
-        jog(robot, k, -0.2, 0.0)
-    }
-
-    /// A jog telecommand for half a second, the `k`th.
-    fn jog(
-        robot: &Robot<Simulator>,
-        k: usize,
-        speed_mps: f64,
-        steer_rad: f64,
-    ) -> stucco_core::Telecommand {
         let now = robot.now();
         stucco_core::Telecommand {
             id: format!("jog-{k}"),
@@ -2227,88 +2214,77 @@ mod tests {
             issued: now,
             deadline: now.offset_secs(1.0),
             command: stucco_core::Command::Jog {
-                speed_mps,
-                steer_rad,
+                speed_mps: -0.2,
+                steer_rad: 0.0,
                 ttl_s: 0.5,
             },
         }
-    }
-
-    /// Jogs at `speed_mps` with the wheel at `steer_rad`, the robot kept
-    /// by `safety`, into someone standing still at `at` in the start's
-    /// frame: the first period the bumper touched them, how many touches,
-    /// and how many periods it touched.
-    #[allow(clippy::expect_used)]
-    fn jog_into_someone(
-        at: Point2<f64>,
-        speed_mps: f64,
-        steer_rad: f64,
-        safety: stucco_mission::SafetyConfig,
-    ) -> (Option<usize>, usize, usize) {
-        let (mut robot, _) = at_the_apartments_start_kept(
-            3,
-            |w| {
-                let start = Pose2::new(
-                    w.robot.at[0],
-                    w.robot.at[1],
-                    w.robot.heading_deg.to_radians(),
-                );
-                let p = start.transform_point(&at);
-                w.people = vec![stucco_sim::PersonSpec {
-                    path: vec![[p.x, p.y], [p.x + 1e-3, p.y]],
-                    speed_mps: 1e-3,
-                }];
-            },
-            safety,
-        );
-        let (mut touches, mut touching, mut first, mut pushing) = (0, false, None, 0);
-        for k in 0..((3.0 * crate::echoes::MOVING_KEEP_S) / DT_S) as usize {
-            if k % 10 == 0 {
-                let jog = jog(&robot, k, speed_mps, steer_rad);
-                robot.telecommands(&[jog]);
-            }
-            robot.tick(&[], false, &mut []).expect("no sink");
-            robot.act(&mut []).expect("no sink");
-            let bumper = robot.platform().truth().bumper;
-            pushing += usize::from(bumper);
-            if bumper && !touching {
-                touches += 1;
-                first.get_or_insert(k);
-            }
-            touching = bumper;
-        }
-        (first, touches, pushing)
-    }
-
-    /// The default field and a site's tight one (3 cm ahead, 2 cm aside,
-    /// as the demo's).
-    fn fields() -> [stucco_mission::SafetyConfig; 2] {
-        [
-            stucco_mission::SafetyConfig::default(),
-            stucco_mission::SafetyConfig {
-                obstacle_margin_m: 0.03,
-                lateral_margin_m: 0.02,
-                ..stucco_mission::SafetyConfig::default()
-            },
-        ]
     }
 
     /// A jog backwards into someone standing behind the robot, where the
     /// laser never looked: the bumper touches them once, and the robot is
     /// then held from backing on into them, not let go to push again when
     /// the bumper's hold is over, nor when an echo of someone moving would
-    /// be forgotten: the robot has not moved off them. With a tight field
-    /// too (the touch kept a grid cell out, a field of 3 cm let the robot
-    /// creep on into them).
+    /// be forgotten: the robot has not moved off them. With the default
+    /// field and a site's tight one (3 cm ahead, 2 cm aside, the demo's:
+    /// the touch kept a grid cell out, the robot crept on into them).
     #[test]
+    #[allow(clippy::expect_used)]
     fn a_robot_backing_into_someone_it_never_saw_touches_them_once() {
-        for (k, safety) in fields().into_iter().enumerate() {
-            let (first, touches, pushing) =
-                jog_into_someone(Point2::new(-0.7, 0.0), -0.2, 0.0, safety);
-            let first = first.unwrap_or_else(|| panic!("field {k}: never touched"));
-            assert!(first < 200, "field {k}: first touch after {first} periods");
-            assert_eq!(touches, 1, "field {k}: pushed again");
-            assert!(pushing < 10, "field {k}: pushed on for {pushing} periods");
+        let tight = stucco_mission::SafetyConfig {
+            obstacle_margin_m: 0.03,
+            lateral_margin_m: 0.02,
+            ..stucco_mission::SafetyConfig::default()
+        };
+        for (field, safety) in [stucco_mission::SafetyConfig::default(), tight]
+            .into_iter()
+            .enumerate()
+        {
+            let behind = |start: &Pose2| {
+                let p = start.transform_point(&Point2::new(-0.7, 0.0));
+                stucco_sim::PersonSpec {
+                    path: vec![[p.x, p.y], [p.x + 1e-3, p.y]],
+                    speed_mps: 1e-3,
+                }
+            };
+            let (mut robot, _) = at_the_apartments_start_kept(
+                3,
+                |w| {
+                    let at = Pose2::new(
+                        w.robot.at[0],
+                        w.robot.at[1],
+                        w.robot.heading_deg.to_radians(),
+                    );
+                    w.people = vec![behind(&at)];
+                },
+                safety,
+            );
+            let (mut touches, mut touching, mut first, mut pushing) = (0, false, None, 0);
+            for k in 0..((3.0 * crate::echoes::MOVING_KEEP_S) / DT_S) as usize {
+                if k % 10 == 0 {
+                    let jog = backing_jog(&robot, k);
+                    robot.telecommands(&[jog]);
+                }
+                robot.tick(&[], false, &mut []).expect("no sink");
+                robot.act(&mut []).expect("no sink");
+                let bumper = robot.platform().truth().bumper;
+                pushing += usize::from(bumper);
+                if bumper && !touching {
+                    touches += 1;
+                    first.get_or_insert(k);
+                }
+                touching = bumper;
+            }
+            let first = first.unwrap_or_else(|| panic!("field {field}: never touched"));
+            assert!(
+                first < 200,
+                "field {field}: first touch after {first} periods"
+            );
+            assert_eq!(touches, 1, "field {field}: pushed again");
+            assert!(
+                pushing < 10,
+                "field {field}: pushed on for {pushing} periods"
+            );
         }
     }
 

@@ -411,64 +411,53 @@ impl Task for Plaster {
                 } else {
                     0.0
                 };
-                // A station not begun yet is put last, once: seen from
-                // the others the walls that hold the position may show
-                // (a person pacing a corridor hid both its end walls
-                // from station 0, and the job failed there undone).
+                // Loose for the supervisor's time, the station is left:
+                // one not begun yet is put last, once (seen from the
+                // others the walls that hold the position may show: a
+                // person pacing a corridor hid both its end walls from
+                // station 0, and the job failed there undone); one put
+                // last before, or begun, is given up, what only it reaches
+                // reported, and the task goes on (the far end of a 22 m
+                // corridor, its end wall behind the robot and the other
+                // 20 m ahead, failed the corridor with 30 of its 47
+                // stations undone; a room's second station, 10.1 mm a
+                // minute into its strokes, failed its last eight). The
+                // task fails, saying why, when no station is left that was
+                // not given up.
                 let begun = run.cursor.pass > 0 || run.cursor.step > 0 || in_move_s > 0.0;
-                if run.held_s > config.safety.lost_timeout_s && !begun {
+                if run.held_s > config.safety.lost_timeout_s {
                     let station = run.cursor.station;
-                    if run.defer_station() {
-                        run.held_s = 0.0;
-                        cx.emit(EventKind::StationDeferred {
+                    let left = if !begun && run.defer_station() {
+                        EventKind::StationDeferred {
                             task: index,
                             station,
-                        });
-                        cx.effects.checkpoint = true;
-                        cx.effects.tool = park;
+                        }
+                    } else {
+                        match run.give_up_station() {
+                            Some(lost) if !run.all_given_up() => EventKind::StationGivenUp {
+                                task: index,
+                                station,
+                                unreachable_m2: lost,
+                            },
+                            _ => {
+                                return TaskStep::Failed(TaskFailure::PositionTooLoose {
+                                    station,
+                                    sigma_m: est.position_sigma_m,
+                                    limit_m: config.safety.spray_max_sigma_m,
+                                    waited_s: config.safety.lost_timeout_s,
+                                });
+                            }
+                        }
+                    };
+                    run.held_s = 0.0;
+                    cx.emit(left);
+                    cx.effects.checkpoint = true;
+                    cx.effects.tool = park;
+                    if !run.finished() {
                         self.ways
                             .replace(next_station_way(cx, clearance, run, &est.pose, speed));
                         run.phase = Phase::Moving;
-                        return TaskStep::Drive(DriveCommand::STOP);
                     }
-                }
-                if run.held_s > config.safety.lost_timeout_s {
-                    let too_loose = TaskFailure::PositionTooLoose {
-                        station: run.cursor.station,
-                        sigma_m: est.position_sigma_m,
-                        limit_m: config.safety.spray_max_sigma_m,
-                        waited_s: config.safety.lost_timeout_s,
-                    };
-                    // Put last before and loose again, or begun: given
-                    // up, what only it reaches reported, and the task goes
-                    // on (the far end of a 22 m corridor, its end wall
-                    // behind the robot and the other 20 m ahead, failed
-                    // the corridor with 30 of its 47 stations undone; a
-                    // room's second station, 10.1 mm a minute into its
-                    // strokes, failed its last eight). The task fails,
-                    // saying why, when no station is left that was not
-                    // given up.
-                    let station = run.cursor.station;
-                    let Some(lost) = run.give_up_station() else {
-                        return TaskStep::Failed(too_loose);
-                    };
-                    if run.all_given_up() {
-                        return TaskStep::Failed(too_loose);
-                    }
-                    run.held_s = 0.0;
-                    cx.emit(EventKind::StationGivenUp {
-                        task: index,
-                        station,
-                        unreachable_m2: lost,
-                    });
-                    cx.effects.checkpoint = true;
-                    cx.effects.tool = park;
-                    if run.finished() {
-                        return TaskStep::Drive(DriveCommand::STOP);
-                    }
-                    self.ways
-                        .replace(next_station_way(cx, clearance, run, &est.pose, speed));
-                    run.phase = Phase::Moving;
                     return TaskStep::Drive(DriveCommand::STOP);
                 }
                 let mut t = in_move_s + if spray_ok { dt } else { 0.0 };
