@@ -53,8 +53,8 @@ pub use checkpoint::{
     CHECKPOINT_FILE, Checkpoint, PLAN_FILE, RoomMap, digest, read_checkpoint, write_atomic,
 };
 pub use executive::{
-    Event, EventKind, Executive, ExecutiveConfig, Inputs, MissionMode, OperatorCommand, Outputs,
-    PARK_NOZZLE_M, Progress, ProgressMismatch, TaskStatus,
+    Event, EventKind, Executive, ExecutiveConfig, GiveUpReason, Inputs, MissionMode,
+    OperatorCommand, Outputs, PARK_NOZZLE_M, Progress, ProgressMismatch, TaskStatus,
 };
 pub use file::{
     BadInput, Corridor, DoorPassage, Mission, RoomSize, Start, StartKnowledge, line_of, parse_toml,

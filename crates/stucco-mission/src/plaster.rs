@@ -12,6 +12,7 @@
 use crate::model::Estimate;
 use nalgebra::{Point2, Point3, Vector3};
 use serde::{Deserialize, Serialize};
+use stucco_core::telemetry::{EventKind, GiveUpReason, TaskFailure};
 pub use stucco_core::telemetry::{PlasterCoverage, SurfaceCoverage};
 use stucco_core::{Aim, Pose2, ToolCommand};
 use stucco_plan::{Lane, Plan, SurfaceId, WallLine};
@@ -98,6 +99,8 @@ pub(crate) struct PlasterRun {
     /// Stations of this plan given up, and the area only they reached,
     /// m².
     pub given_up: (usize, f64),
+    /// How many of them were given up for a position too loose to spray.
+    pub given_up_loose: usize,
     /// The bases of the stations put last once already (their way stayed
     /// blocked): blocked again, they are given up.
     pub deferred: Vec<Pose2>,
@@ -119,6 +122,7 @@ impl PlasterRun {
             unsaved_s: 0.0,
             way_unchecked: false,
             given_up: (0, 0.0),
+            given_up_loose: 0,
             deferred: Vec::new(),
             held_s: 0.0,
         }
@@ -130,14 +134,30 @@ impl PlasterRun {
         self.plan.stations.is_empty() && self.given_up.0 > 0
     }
 
-    /// Gives up the current station, which the robot cannot get to: the
-    /// plan goes on with the next one and reports what only it reached
-    /// as unreachable. The area lost, m².
-    pub fn give_up_station(&mut self) -> Option<f64> {
-        let lost = self.plan.give_up_station(self.cursor.station)?;
+    /// Gives up the current station for `reason`: the plan goes on with
+    /// the next one and reports what only it reached as unreachable. The
+    /// event that tells it.
+    pub fn give_up_station(&mut self, task: usize, reason: GiveUpReason) -> Option<EventKind> {
+        let station = self.cursor.station;
+        let lost = self.plan.give_up_station(station)?;
         self.station_changed();
         self.given_up = (self.given_up.0 + 1, self.given_up.1 + lost);
-        Some(lost)
+        self.given_up_loose += usize::from(reason == GiveUpReason::PositionLoose);
+        Some(EventKind::StationGivenUp {
+            task,
+            station,
+            unreachable_m2: lost,
+            reason,
+        })
+    }
+
+    /// The task's failure once every station was given up, saying why.
+    pub fn all_given_up_failure(&self) -> TaskFailure {
+        TaskFailure::AllStationsGivenUp {
+            stations: self.given_up.0,
+            loose: self.given_up_loose,
+            unreachable_m2: self.given_up.1,
+        }
     }
 
     /// Another station is now at the cursor: from its start, the plan's

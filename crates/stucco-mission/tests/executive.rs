@@ -1789,19 +1789,21 @@ fn a_station_where_the_position_stays_loose_for_good_is_given_up() {
     let (exec, events, plan) = plaster_loose_at_the_first_station(|_, _| true);
     let k = kinds(&events);
     assert_eq!(*exec.mode(), MissionMode::Done, "{k:?}");
-    let given_up: Vec<(usize, f64)> = events
+    let given_up: Vec<(usize, f64, GiveUpReason)> = events
         .iter()
         .filter_map(|e| match e.kind {
             EventKind::StationGivenUp {
                 station,
                 unreachable_m2,
+                reason,
                 ..
-            } => Some((station, unreachable_m2)),
+            } => Some((station, unreachable_m2, reason)),
             _ => None,
         })
         .collect();
     assert_eq!(given_up.len(), 1, "{k:?}");
     assert!(given_up[0].1 > 0.0, "{given_up:?}");
+    assert_eq!(given_up[0].2, GiveUpReason::PositionLoose);
     let passes: usize = plan.stations[1..].iter().map(|s| s.passes.len()).sum();
     assert_eq!(k.iter().filter(|k| *k == "pass_done").count(), passes);
 }
@@ -1816,8 +1818,14 @@ fn a_station_begun_where_the_position_goes_loose_for_good_is_given_up() {
         plaster_loose_at_the_first_station(|t, started| started.is_some_and(|s| t > s + 5.0));
     let k = kinds(&events);
     assert_eq!(*exec.mode(), MissionMode::Done, "{k:?}");
-    let given_up = k.iter().filter(|k| *k == "station_given_up").count();
-    assert_eq!(given_up, 1, "{k:?}");
+    let given_up: Vec<GiveUpReason> = events
+        .iter()
+        .filter_map(|e| match e.kind {
+            EventKind::StationGivenUp { reason, .. } => Some(reason),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(given_up, [GiveUpReason::PositionLoose], "{k:?}");
     assert!(!k.iter().any(|k| k == "station_deferred"), "{k:?}");
     let passes: usize = plan.stations[1..].iter().map(|s| s.passes.len()).sum();
     assert_eq!(k.iter().filter(|k| *k == "pass_done").count(), passes);
@@ -2515,7 +2523,14 @@ fn the_robot_plasters_a_hall_too_narrow_to_turn_across_and_gives_up_its_end_wall
         }
         for e in &out.events {
             match e.kind {
-                EventKind::StationGivenUp { unreachable_m2, .. } => given_up.push(unreachable_m2),
+                EventKind::StationGivenUp {
+                    unreachable_m2,
+                    reason,
+                    ..
+                } => {
+                    assert_eq!(reason, GiveUpReason::NoWay);
+                    given_up.push(unreachable_m2);
+                }
                 EventKind::PassDone { .. } => passes += 1,
                 _ => {}
             }
@@ -2657,9 +2672,11 @@ fn a_plaster_task_whose_stations_are_all_given_up_fails_saying_why() {
     match exec.failure() {
         Some(stucco_mission::TaskFailure::AllStationsGivenUp {
             stations,
+            loose,
             unreachable_m2,
         }) => {
             assert_eq!(*stations, given_up);
+            assert_eq!(*loose, 0, "no way reached them");
             // Both end walls less their edges, 2.4 m² each.
             assert!((4.6..5.0).contains(unreachable_m2), "{unreachable_m2}");
         }

@@ -14,6 +14,29 @@ pub struct Event {
     pub kind: EventKind,
 }
 
+/// Why a plastering station was given up: what an operator can do about
+/// it differs (clear the way, or let the robot see more of the walls).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GiveUpReason {
+    /// No way to it keeps the body clear (a hall too narrow to turn
+    /// across), or the way stayed held when tried again.
+    #[default]
+    NoWay,
+    /// The position stayed known too loosely to spray there (the walls
+    /// that hold it out of the laser's sight from the station).
+    PositionLoose,
+}
+
+impl std::fmt::Display for GiveUpReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            GiveUpReason::NoWay => "no way reached it",
+            GiveUpReason::PositionLoose => "the position stayed too loose to spray there",
+        })
+    }
+}
+
 /// The kinds of events.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]
@@ -139,8 +162,7 @@ pub enum EventKind {
         /// Its sill and head, m.
         sill_head_m: [f64; 2],
     },
-    /// No way to a plastering station keeps the body clear (a hall too
-    /// narrow to turn across): the station is left out of the plan, and
+    /// A plastering station is left out of the plan, for `reason`, and
     /// what only it reached is reported unreachable.
     StationGivenUp {
         /// The task.
@@ -149,6 +171,9 @@ pub enum EventKind {
         station: usize,
         /// Plasterable area lost with it, m².
         unreachable_m2: f64,
+        /// Why (a log written before the reason was told: no way).
+        #[serde(default)]
+        reason: GiveUpReason,
     },
     /// The way to a plastering station stayed blocked (someone standing
     /// in it, a wall nearer the station than the field's margin): the
@@ -285,6 +310,12 @@ mod tests {
                 task: 2,
                 station: 7,
             },
+            EventKind::StationGivenUp {
+                task: 2,
+                station: 5,
+                unreachable_m2: 3.25,
+                reason: GiveUpReason::PositionLoose,
+            },
             EventKind::BehaviourStarted {
                 task: 2,
                 behaviour: "reverse".to_owned(),
@@ -314,5 +345,21 @@ mod tests {
             let back: Event = serde_json::from_str(&text).unwrap();
             assert_eq!(back, event, "{text}");
         }
+    }
+
+    /// A station given up in a log written before the reason was told
+    /// reads as one no way reached, what the event meant then.
+    #[test]
+    fn a_station_given_up_without_a_reason_reads_as_no_way() {
+        let text = r#"{"stamp":1000000000,"event":"station_given_up","task":1,"station":4,"unreachable_m2":2.5}"#;
+        let back: Event = serde_json::from_str(text).unwrap();
+        assert!(matches!(
+            back.kind,
+            EventKind::StationGivenUp {
+                station: 4,
+                reason: GiveUpReason::NoWay,
+                ..
+            }
+        ));
     }
 }

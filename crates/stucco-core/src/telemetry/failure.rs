@@ -139,11 +139,16 @@ pub enum TaskFailure {
         /// The planner's words.
         error: String,
     },
-    /// `plaster`: no way reached any of the plan's stations: every one
-    /// was given up and nothing was plastered.
+    /// `plaster`: every one of the plan's stations was given up (no way
+    /// reached it, or the position stayed too loose to spray there) and
+    /// nothing was plastered.
     AllStationsGivenUp {
         /// The stations given up.
         stations: usize,
+        /// How many of them for a position too loose to spray there (the
+        /// rest no way reached).
+        #[serde(default)]
+        loose: usize,
         /// The plasterable area they were to reach, m².
         unreachable_m2: f64,
     },
@@ -340,11 +345,23 @@ impl std::fmt::Display for TaskFailure {
             TaskFailure::Planning { error } => write!(f, "plaster: {error}"),
             TaskFailure::AllStationsGivenUp {
                 stations,
+                loose: 0,
                 unreachable_m2,
             } => write!(
                 f,
                 "plaster: no way reached any of its {stations} stations: nothing plastered \
                  ({unreachable_m2:.1} m² left unreachable)"
+            ),
+            TaskFailure::AllStationsGivenUp {
+                stations,
+                loose,
+                unreachable_m2,
+            } => write!(
+                f,
+                "plaster: all {stations} stations given up, {loose} for a position too loose \
+                 to spray there and {} no way reached: nothing plastered ({unreachable_m2:.1} m² \
+                 left unreachable)",
+                stations - loose
             ),
             TaskFailure::NothingReachable { unreachable_m2 } => write!(
                 f,
@@ -383,3 +400,35 @@ impl std::fmt::Display for TaskFailure {
 }
 
 impl std::error::Error for TaskFailure {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A task whose stations were all given up tells how many for a
+    /// position too loose and how many no way reached: an operator clears
+    /// a way for the one, not the other.
+    #[test]
+    fn stations_all_given_up_say_why() {
+        let no_way = TaskFailure::AllStationsGivenUp {
+            stations: 3,
+            loose: 0,
+            unreachable_m2: 4.0,
+        }
+        .to_string();
+        assert!(
+            no_way.contains("no way reached any of its 3 stations"),
+            "{no_way}"
+        );
+        let mixed = TaskFailure::AllStationsGivenUp {
+            stations: 14,
+            loose: 12,
+            unreachable_m2: 35.9,
+        }
+        .to_string();
+        assert!(
+            mixed.contains("12 for a position too loose") && mixed.contains("2 no way reached"),
+            "{mixed}"
+        );
+    }
+}

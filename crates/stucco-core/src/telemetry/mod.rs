@@ -10,7 +10,7 @@ mod failure;
 mod map;
 
 pub use coverage::{PlasterCoverage, SurfaceCoverage};
-pub use event::{Event, EventKind};
+pub use event::{Event, EventKind, GiveUpReason};
 pub use failure::TaskFailure;
 pub use map::{DoorEstimate, Estimate, Obstacle, WindowEstimate};
 

@@ -20,7 +20,7 @@ use std::collections::BTreeMap;
 use stucco_control::GainSchedule;
 pub use stucco_core::MissionMode;
 pub use stucco_core::OperatorCommand;
-pub use stucco_core::telemetry::{Event, EventKind};
+pub use stucco_core::telemetry::{Event, EventKind, GiveUpReason};
 use stucco_core::{Ack, DriveCommand, Reply, Stamp, Telecommand, ToolCommand, VehicleSpec};
 use stucco_plan::{Plan, SprayTool};
 

@@ -10,7 +10,7 @@ use super::{
     pivot_clearance,
 };
 use crate::behaviour::{Behaviour, BehaviourKind};
-use crate::executive::{EventKind, ExecutiveConfig, PARK_NOZZLE_M};
+use crate::executive::{EventKind, ExecutiveConfig, GiveUpReason, PARK_NOZZLE_M};
 use crate::manoeuvre::{self, Space};
 use crate::model::{DoorEstimate, Estimate, WallGeometry, walls_or_all};
 use crate::plaster::{Cursor, Phase, PlasterCoverage, PlasterProgress, PlasterRun, plan_digest};
@@ -172,10 +172,7 @@ impl Task for Plaster {
         };
         // Never done when nothing could be reached: the job says why.
         if run.all_given_up() {
-            return TaskStep::Failed(TaskFailure::AllStationsGivenUp {
-                stations: run.given_up.0,
-                unreachable_m2: run.given_up.1,
-            });
+            return TaskStep::Failed(run.all_given_up_failure());
         }
         if run.finished() && !matches!(run.phase, Phase::Leaving) {
             return TaskStep::Done;
@@ -433,12 +430,8 @@ impl Task for Plaster {
                             station,
                         }
                     } else {
-                        match run.give_up_station() {
-                            Some(lost) if !run.all_given_up() => EventKind::StationGivenUp {
-                                task: index,
-                                station,
-                                unreachable_m2: lost,
-                            },
+                        match run.give_up_station(index, GiveUpReason::PositionLoose) {
+                            Some(given_up) if !run.all_given_up() => given_up,
                             _ => {
                                 return TaskStep::Failed(TaskFailure::PositionTooLoose {
                                     station,
@@ -641,12 +634,8 @@ impl Task for Plaster {
                     task: index,
                     station,
                 });
-            } else if let Some(lost) = run.give_up_station() {
-                cx.emit(EventKind::StationGivenUp {
-                    task: index,
-                    station,
-                    unreachable_m2: lost,
-                });
+            } else if let Some(given_up) = run.give_up_station(index, GiveUpReason::NoWay) {
+                cx.emit(given_up);
             }
             // Held on a way not found clear (turning toward a hall's end
             // wall) where the body's margins are not kept clear, the
