@@ -188,6 +188,10 @@ const DOOR_TRACK_M: f64 = 0.01;
 /// The slowest speed the supervisor slows a command to before it stops
 /// it, m/s (3 cm/s at the wheel, as a manoeuvre ends its moves).
 const CREEP_MPS: f64 = 0.05;
+/// How much nearer a drive must take a point already in the field's side
+/// band for it to hold the robot, m: a millimetre, what the arithmetic of
+/// the body's poses along the arc may add by itself.
+const NEARER_M: f64 = 1e-3;
 
 impl Supervisor {
     /// The supervisor of `vehicle` with `config`.
@@ -254,7 +258,22 @@ impl Supervisor {
             sign * cmd.steer_rad.sin() / v.wheelbase_m,
         );
         let (back, front) = (-v.rear_overhang_m, v.front_m());
-        let half = 0.5 * v.width_m + c.lateral_margin_m;
+        let bare = 0.5 * v.width_m;
+        let half = bare + c.lateral_margin_m;
+        // How deep a point lies in the field's side band, m, where it does.
+        let depth = |q: &Point2<f64>| {
+            (q.x >= back && q.x <= front && q.y.abs() <= half).then(|| half - q.y.abs())
+        };
+        // Beside the body already, within the side margin (a wall the
+        // robot stands nearer than the margin, as after a station): held
+        // only by a drive that takes it nearer. Held by any drive, a robot
+        // that came within the margin of a wall (the laser's echoes of it
+        // scatter by 2 cm) stood there until its way failed, when it
+        // could drive along or off it.
+        let beside: Vec<Option<f64>> = obstacles
+            .iter()
+            .map(|p| depth(p).filter(|_| p.y.abs() > bare))
+            .collect();
         // Poses every 5 cm of travel (and every 3° of turn).
         let steps = ((travel / 0.05).max(travel * turn.abs() / 0.05).ceil() as usize).max(1);
         let ds = travel / steps as f64;
@@ -264,11 +283,12 @@ impl Supervisor {
             let inv = pose.inverse();
             obstacles
                 .iter()
-                .find(|p| {
+                .zip(&beside)
+                .find(|(p, beside)| {
                     let q = inv.transform_point(p);
-                    q.x >= back && q.x <= front && q.y.abs() <= half
+                    depth(&q).is_some_and(|d| beside.is_none_or(|d0| d > d0 + NEARER_M))
                 })
-                .copied()
+                .map(|(p, _)| *p)
         })
     }
 
@@ -449,6 +469,34 @@ mod tests {
         };
         assert!(s.blocked(&back, &[Point2::new(-0.3, 0.0)]));
         assert!(!s.blocked(&back, &[Point2::new(1.0, 0.0)]));
+    }
+
+    /// Echoes of a wall 2 cm nearer the body's right side than the field's
+    /// margin, beside the body (a station's standoff, the laser's
+    /// scatter): the robot may drive or back straight along them, not turn
+    /// into them, nor turn off them (its rear corner swings nearer); where
+    /// the wall goes on ahead of the body, its echoes there hold a drive
+    /// along it as the margin asks.
+    #[test]
+    fn echoes_beside_within_the_side_margin_hold_only_a_drive_nearer_to_them() {
+        let s = Supervisor::new(SafetyConfig::default(), VehicleSpec::default());
+        let y = -(0.31 + SafetyConfig::default().lateral_margin_m - 0.02);
+        let wall = |from: f64, to: f64| -> Vec<Point2<f64>> {
+            let n = ((to - from) / 0.05).round() as usize;
+            (0..=n)
+                .map(|k| Point2::new(from + 0.05 * k as f64, y))
+                .collect()
+        };
+        let drive = |speed_mps: f64, steer_rad: f64| DriveCommand {
+            speed_mps,
+            steer_rad,
+        };
+        let beside = wall(-0.15, 0.75);
+        assert!(!s.blocked(&drive(0.3, 0.0), &beside), "along it");
+        assert!(!s.blocked(&drive(-0.3, 0.0), &beside), "backing along it");
+        assert!(s.blocked(&drive(0.3, -0.3), &beside), "turning into it");
+        assert!(s.blocked(&drive(0.3, 0.3), &beside), "turning off it");
+        assert!(s.blocked(&drive(0.3, 0.0), &wall(-0.15, 2.0)), "on ahead");
     }
 
     #[test]
