@@ -269,7 +269,7 @@ impl Supervisor {
         // only by a drive that takes it nearer. Held by any drive, a robot
         // that came within the margin of a wall (the laser's echoes of it
         // scatter by 2 cm) stood there until its way failed, when it
-        // could drive along or off it.
+        // could have driven or backed along it.
         let beside: Vec<Option<f64>> = obstacles
             .iter()
             .map(|p| depth(p).filter(|_| p.y.abs() > bare))
