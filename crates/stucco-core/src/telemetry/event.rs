@@ -28,15 +28,6 @@ pub enum GiveUpReason {
     PositionLoose,
 }
 
-impl std::fmt::Display for GiveUpReason {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            GiveUpReason::NoWay => "no way reached it",
-            GiveUpReason::PositionLoose => "the position stayed too loose to spray there",
-        })
-    }
-}
-
 /// The kinds of events.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]

@@ -410,22 +410,20 @@ mod tests {
     /// a way for the one, not the other.
     #[test]
     fn stations_all_given_up_say_why() {
-        let no_way = TaskFailure::AllStationsGivenUp {
-            stations: 3,
-            loose: 0,
-            unreachable_m2: 4.0,
-        }
-        .to_string();
+        let words = |stations, loose| {
+            TaskFailure::AllStationsGivenUp {
+                stations,
+                loose,
+                unreachable_m2: 4.0,
+            }
+            .to_string()
+        };
+        let no_way = words(3, 0);
         assert!(
             no_way.contains("no way reached any of its 3 stations"),
             "{no_way}"
         );
-        let mixed = TaskFailure::AllStationsGivenUp {
-            stations: 14,
-            loose: 12,
-            unreachable_m2: 35.9,
-        }
-        .to_string();
+        let mixed = words(14, 12);
         assert!(
             mixed.contains("12 for a position too loose") && mixed.contains("2 no way reached"),
             "{mixed}"
