@@ -1,5 +1,8 @@
-//! Time to extract walls from one scan of the cluttered reference room: the RWHT extractor, the RANSAC baseline and the rectangular-room search, on 450-beam (IBEO LADAR 2D) and 1081-beam (Hokuyo UTM-30) scans, plus the Hough transform alone; run with `cargo bench -p stucco-nav --bench extract -- --noplot`.
+//! Time to extract walls from one scan of the cluttered reference room: the RWHT extractor (and the implementation it replaced, `stucco_nav::baseline`, side by side), the RANSAC baseline and the rectangular-room search, on 450-beam (IBEO LADAR 2D) and 1081-beam (Hokuyo UTM-30) scans, plus the Hough transform alone; and walls and doors of every scan of the fr079 log as `stucco walls` times them, now and before, when the shared data sits beside the repository. Run with `cargo bench -p stucco-nav --bench extract -- --noplot`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+
+#[path = "../tests/common/mod.rs"]
+mod common;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::SeedableRng;
@@ -8,8 +11,9 @@ use std::hint::black_box;
 use std::time::Duration;
 use stucco_core::{LaserSpec, Pose2, Stamp, Twist2};
 use stucco_nav::{
-    FitConfig, HoughConfig, HoughTransform, RansacConfig, RansacExtractor, RoomConfig, RoomSearch,
-    RwhtConfig, RwhtExtractor, ScanPoints, WallExtractor, Weighting, synthetic,
+    DoorConfig, FitConfig, HoughConfig, HoughTransform, RansacConfig, RansacExtractor, RoomConfig,
+    RoomSearch, RwhtConfig, RwhtExtractor, ScanPoints, WallExtractor, Weighting, baseline,
+    find_doors, synthetic,
 };
 
 /// Robot poses (and rooms) per scan set.
@@ -51,7 +55,7 @@ fn scans(spec: &LaserSpec) -> Vec<ScanPoints> {
 }
 
 /// The scans in turn, one per call, round and round.
-fn cycle<'a>(scans: &'a [ScanPoints]) -> impl FnMut() -> &'a ScanPoints {
+fn cycle<'a, T>(scans: &'a [T]) -> impl FnMut() -> &'a T {
     let mut i = 0;
     move || {
         let s = &scans[i % scans.len()];
@@ -81,6 +85,16 @@ fn extract(c: &mut Criterion) {
         let mut next = cycle(&scans);
         g.bench_function("rwht", |b| {
             b.iter(|| black_box(rwht.extract(black_box(next()))));
+        });
+
+        let mut before = baseline::RwhtExtractor::new(RwhtConfig {
+            fit: fit.clone(),
+            ..RwhtConfig::default()
+        })
+        .expect("valid RWHT settings");
+        let mut next = cycle(&scans);
+        g.bench_function("rwht-baseline", |b| {
+            b.iter(|| black_box(before.extract(black_box(next()))));
         });
 
         let mut ransac = RansacExtractor::new(RansacConfig {
@@ -125,12 +139,63 @@ fn hough(c: &mut Criterion) {
     g.finish();
 }
 
+/// Walls and doors of every scan of fr079 in turn, each timed as `stucco
+/// walls` times it (the points, the walls, the doors), by the extractor and
+/// by the baseline; nothing when the shared log is not there.
+fn fr079(c: &mut Criterion) {
+    let log = common::flaser::shared_log("freiburg-079-corrected.log.gz");
+    let Ok(scans) = common::flaser::flaser_scans(&log) else {
+        eprintln!("{} not found: fr079 not benched", log.display());
+        return;
+    };
+    // As `stucco walls` tunes them for the SICK scanners of the logs.
+    let laser = LaserSpec {
+        range_sigma_m: 0.015,
+        ..LaserSpec::sick_lms291()
+    };
+    let config = RwhtConfig {
+        hough: HoughConfig {
+            surface_noise_m: laser.range_sigma_m,
+            ..HoughConfig::default()
+        },
+        fit: FitConfig {
+            noise_sigma_m: laser.range_sigma_m,
+            ..FitConfig::default()
+        },
+        ..RwhtConfig::default()
+    };
+    let doors = DoorConfig::for_laser(&laser);
+    let mut g = c.benchmark_group("walls/fr079");
+    let mut points = ScanPoints::default();
+    let mut rwht = RwhtExtractor::new(config.clone()).expect("valid RWHT settings");
+    let mut next = cycle(&scans);
+    g.bench_function("rwht+doors", |b| {
+        b.iter(|| {
+            let scan = next();
+            points.fill(scan);
+            let walls = rwht.extract(&points);
+            black_box(find_doors(scan, &walls, &doors))
+        });
+    });
+    let mut before = baseline::RwhtExtractor::new(config).expect("valid RWHT settings");
+    let mut next = cycle(&scans);
+    g.bench_function("baseline", |b| {
+        b.iter(|| {
+            let scan = next();
+            points.fill(scan);
+            let walls = before.extract(&points);
+            black_box(baseline::find_doors(scan, &walls, &doors))
+        });
+    });
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(3))
         .sample_size(30);
-    targets = extract, hough
+    targets = extract, hough, fr079
 }
 criterion_main!(benches);

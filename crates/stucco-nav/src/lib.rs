@@ -53,6 +53,7 @@
 #![warn(missing_docs)]
 
 mod association;
+pub mod baseline;
 mod calibration;
 mod defeature;
 mod door;

@@ -1,0 +1,3 @@
+//! Helpers shared by the tests and benches of stucco-nav.
+
+pub mod flaser;
