@@ -81,6 +81,16 @@ pub(crate) struct LineFitter {
     pool: Vec<usize>,
     pool_line: Option<Line>,
     reach_m: f64,
+    /// The candidates' points, in their order, and the weighted sums of
+    /// the last selection (Σw, Σw·p): the first half of the line's fit,
+    /// taken while selecting.
+    coords: Vec<Vector2<f64>>,
+    sums: (f64, Vector2<f64>),
+    /// The candidates before the last selection, and the inliers of the
+    /// final fit (buffers).
+    previous: Vec<usize>,
+    inliers: Vec<usize>,
+    keep: Vec<usize>,
 }
 
 /// A line in normal form, `n(γ)·p = d`, with its normal at hand.
@@ -127,14 +137,30 @@ impl LineFitter {
         taken: &[bool],
         seeds: impl IntoIterator<Item = usize>,
     ) -> Option<LineFit> {
-        let cfg = self.config.clone();
-        let cut = cfg.tukey_c * cfg.noise_sigma_m;
+        self.fit_within(pts, reach_m(pts), taken, seeds)
+    }
+
+    /// [`LineFitter::fit`] with the scan's reach, [`reach_m`] of `pts`,
+    /// worked out once for all the fits of a scan.
+    pub fn fit_within(
+        &mut self,
+        pts: &[ScanPoint],
+        reach_m: f64,
+        taken: &[bool],
+        seeds: impl IntoIterator<Item = usize>,
+    ) -> Option<LineFit> {
+        let cfg = &self.config;
+        let (cut, min_points, max_iterations) = (
+            cfg.tukey_c * cfg.noise_sigma_m,
+            cfg.min_points,
+            cfg.max_iterations,
+        );
         self.candidates.clear();
         self.candidates
             .extend(seeds.into_iter().filter(|&i| !taken[i]));
         self.pool_line = None;
-        self.reach_m = pts.iter().fold(0.0, |m, p| m.max(p.range_m));
-        if self.candidates.len() < cfg.min_points {
+        self.reach_m = reach_m;
+        if self.candidates.len() < min_points {
             return None;
         }
         self.weights.clear();
@@ -143,12 +169,12 @@ impl LineFitter {
         // Tukey reweighting at the noise scale; after convergence keep the
         // heaviest gap-free run and refit on it.
         let mut chained = false;
-        for _ in 0..cfg.max_iterations {
+        for _ in 0..max_iterations {
             self.select(pts, taken, line, cut, chained);
-            if self.candidates.len() < cfg.min_points {
+            if self.candidates.len() < min_points {
                 return None;
             }
-            let next = weighted_tls(pts, &self.candidates, &self.weights)?;
+            let next = self.selected_tls()?;
             let moved = (next.d - line.d).abs() + (wrap_angle(next.gamma - line.gamma)).abs() * 5.0;
             line = next;
             if moved < 1e-4 {
@@ -172,8 +198,9 @@ impl LineFitter {
         self.finish(pts, line)
     }
 
-    /// Candidates within `cut` of `line`, with their Tukey weights. With
-    /// `within_run`, only the current candidates are reconsidered.
+    /// Candidates within `cut` of `line`, with their Tukey weights, their
+    /// points and the weighted sums of them. With `within_run`, only the
+    /// current candidates are reconsidered.
     fn select(
         &mut self,
         pts: &[ScanPoint],
@@ -190,29 +217,58 @@ impl LineFitter {
             });
             if stale {
                 self.pool.clear();
-                self.pool.extend(
-                    (0..pts.len())
-                        .filter(|&i| !taken[i] && line.residual(&pts[i].p).abs() < cut + margin),
-                );
+                let reach = cut + margin;
+                for (i, (p, &t)) in pts.iter().zip(taken).enumerate() {
+                    if !t && line.residual(&p.p).abs() < reach {
+                        self.pool.push(i);
+                    }
+                }
                 self.pool_line = Some(line);
             }
-            self.candidates.clear();
-            self.candidates.extend(
-                self.pool
-                    .iter()
-                    .copied()
-                    .filter(|&i| line.residual(&pts[i].p).abs() < cut),
-            );
-        } else {
-            self.candidates
-                .retain(|&i| line.residual(&pts[i].p).abs() < cut);
         }
+        // One pass over the measurements that may stay: the residual, the
+        // weight, the point and the sums the fit's centroid needs, in the
+        // order the fit takes them.
+        std::mem::swap(&mut self.previous, &mut self.candidates);
+        let source = if within_run {
+            &self.previous
+        } else {
+            &self.pool
+        };
+        self.candidates.clear();
         self.weights.clear();
-        self.weights.extend(self.candidates.iter().map(|&i| {
-            let u = line.residual(&pts[i].p) / cut;
-            let t = 1.0 - u * u;
-            t * t
-        }));
+        self.coords.clear();
+        let mut sw = 0.0;
+        let mut c = Vector2::zeros();
+        for &i in source {
+            let p = pts[i].p.coords;
+            let r = line.normal.dot(&p) - line.d;
+            if r.abs() < cut {
+                let u = r / cut;
+                let t = 1.0 - u * u;
+                let w = t * t;
+                self.candidates.push(i);
+                self.weights.push(w);
+                self.coords.push(p);
+                sw += w;
+                c += p * w;
+            }
+        }
+        self.sums = (sw, c);
+    }
+
+    /// The total-least-squares line of the last selection: what
+    /// [`weighted_tls`] gives for its candidates and weights.
+    fn selected_tls(&self) -> Option<Line> {
+        let (sw, c) = self.sums;
+        tls_about(
+            sw,
+            c,
+            self.coords
+                .iter()
+                .copied()
+                .zip(self.weights.iter().copied()),
+        )
     }
 
     /// Keeps the candidates of the heaviest run without gaps longer than
@@ -268,27 +324,42 @@ impl LineFitter {
         if hi - lo == self.along.len() {
             return false;
         }
-        let keep: Vec<usize> = self.along[lo..hi].iter().map(|&(_, k)| k).collect();
-        let mut keep_sorted = keep;
-        keep_sorted.sort_unstable();
-        self.candidates = keep_sorted.iter().map(|&k| self.candidates[k]).collect();
-        self.weights = keep_sorted.iter().map(|&k| self.weights[k]).collect();
+        self.keep.clear();
+        self.keep.extend(self.along[lo..hi].iter().map(|&(_, k)| k));
+        self.keep.sort_unstable();
+        // The kept candidates in their order: each lands at or before its
+        // old place.
+        for (to, &k) in self.keep.iter().enumerate() {
+            self.candidates[to] = self.candidates[k];
+            self.weights[to] = self.weights[k];
+        }
+        self.candidates.truncate(self.keep.len());
+        self.weights.truncate(self.keep.len());
         true
     }
 
     /// The wall of the final fit: covariance from the residuals, extent from
     /// the outermost inliers.
     fn finish(&mut self, pts: &[ScanPoint], line: Line) -> Option<LineFit> {
+        let inlier_cut = 3.0 * self.config.noise_sigma_m;
+        let mut inliers = std::mem::take(&mut self.inliers);
+        inliers.clear();
+        inliers.extend(
+            self.candidates
+                .iter()
+                .copied()
+                .filter(|&i| line.residual(&pts[i].p).abs() <= inlier_cut),
+        );
+        let fit = self.wall_on(pts, line, &inliers);
+        self.inliers = inliers;
+        fit
+    }
+
+    /// The wall of `line` resting on `inliers`.
+    fn wall_on(&self, pts: &[ScanPoint], line: Line, inliers: &[usize]) -> Option<LineFit> {
         let cfg = &self.config;
-        let inlier_cut = 3.0 * cfg.noise_sigma_m;
         let n_vec = line.normal();
         let dir = Vector2::new(-n_vec.y, n_vec.x);
-        let inliers: Vec<usize> = self
-            .candidates
-            .iter()
-            .copied()
-            .filter(|&i| line.residual(&pts[i].p).abs() <= inlier_cut)
-            .collect();
         let n = inliers.len();
         if n < cfg.min_points.max(3) {
             return None;
@@ -296,7 +367,7 @@ impl LineFitter {
         let mut t_min = f64::INFINITY;
         let mut t_max = f64::NEG_INFINITY;
         let (mut sum_t, mut sum_r2) = (0.0, 0.0);
-        for &i in &inliers {
+        for &i in inliers {
             let t = dir.dot(&pts[i].p.coords);
             t_min = t_min.min(t);
             t_max = t_max.max(t);
@@ -373,6 +444,12 @@ pub(crate) fn mark_free_standing(pts: &[ScanPoint], config: &FitConfig, taken: &
     }
 }
 
+/// The reach of a scan for [`LineFitter::fit_within`]: its farthest
+/// measurement's range, m.
+pub(crate) fn reach_m(pts: &[ScanPoint]) -> f64 {
+    pts.iter().fold(0.0, |m, p| m.max(p.range_m))
+}
+
 /// Weighted total least squares line through `pts[idx]`, with `d ≥ 0`.
 pub(crate) fn weighted_tls(pts: &[ScanPoint], idx: &[usize], w: &[f64]) -> Option<Line> {
     let mut sw = 0.0;
@@ -381,16 +458,31 @@ pub(crate) fn weighted_tls(pts: &[ScanPoint], idx: &[usize], w: &[f64]) -> Optio
         sw += w[k];
         c += pts[i].p.coords * w[k];
     }
+    tls_about(
+        sw,
+        c,
+        idx.iter().zip(w).map(|(&i, &w)| (pts[i].p.coords, w)),
+    )
+}
+
+/// The weighted total least squares line through `points` (each with its
+/// weight), given their weighted sums `sw = Σw` and `c = Σw·p` taken in
+/// the same order.
+fn tls_about(
+    sw: f64,
+    mut c: Vector2<f64>,
+    points: impl Iterator<Item = (Vector2<f64>, f64)>,
+) -> Option<Line> {
     if sw <= 0.0 {
         return None;
     }
     c /= sw;
     let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    for (k, &i) in idx.iter().enumerate() {
-        let q = pts[i].p.coords - c;
-        sxx += w[k] * q.x * q.x;
-        syy += w[k] * q.y * q.y;
-        sxy += w[k] * q.x * q.y;
+    for (p, w) in points {
+        let q = p - c;
+        sxx += w * q.x * q.x;
+        syy += w * q.y * q.y;
+        sxy += w * q.x * q.y;
     }
     // The normal is the direction of least scatter: angle of the principal
     // axis plus 90°.

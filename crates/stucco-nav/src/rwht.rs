@@ -10,7 +10,7 @@
 use crate::NavError;
 use crate::extractor::WallExtractor;
 use crate::hough::{HoughConfig, Weighting};
-use crate::line_fit::{FitConfig, LineFitter, mark_free_standing};
+use crate::line_fit::{FitConfig, LineFitter, mark_free_standing, reach_m};
 use crate::points::{ScanPoint, ScanPoints};
 use crate::segments::{Segment, SegmentTransform, Segmenter};
 use crate::wall::Wall;
@@ -84,6 +84,10 @@ pub struct RwhtExtractor {
     /// Segments a wall has taken (most of their echoes).
     spent: Vec<bool>,
     taken: Vec<bool>,
+    /// The segment each echo is in (`u32::MAX` for none).
+    segment_of: Vec<u32>,
+    /// Echoes of each segment taken so far.
+    held: Vec<u32>,
     candidates: Vec<Candidate>,
     seeds: Vec<usize>,
 }
@@ -110,6 +114,8 @@ impl RwhtExtractor {
             segments: Vec::new(),
             spent: Vec::new(),
             taken: Vec::new(),
+            segment_of: Vec::new(),
+            held: Vec::new(),
             candidates: Vec::new(),
             seeds: Vec::new(),
         })
@@ -142,30 +148,40 @@ impl RwhtExtractor {
         self.candidates.clear();
         let h = &self.transform;
         let (n, m) = (h.angle_bins(), h.distance_bins());
+        // A cell is below the threshold exactly when it is below the
+        // smallest f32 that is not: the rows are searched in f32, a block
+        // of cells at a time, and blocks with no cell that high skipped.
+        let floor = f32_at_least(threshold);
         for k in 0..n {
             let row = h.row(k);
-            let prev = h.row((k + n - 1) % n);
-            let next = h.row((k + 1) % n);
+            let voted = h.voted(k);
             // Cells without votes are zero, under any threshold.
-            for j in h.voted(k) {
-                let v = row[j];
-                if f64::from(v) < threshold {
+            for (b, block) in row[voted.clone()].chunks(BLOCK).enumerate() {
+                if !block.iter().fold(false, |any, &v| any | (v >= floor)) {
                     continue;
                 }
-                let lo = j.saturating_sub(1);
-                let hi = (j + 1).min(m - 1);
-                // Strictly above the neighbours before, at least the ones after:
-                // a plateau yields exactly one maximum.
-                let is_max = (lo..=hi).all(|jj| v > prev[jj] && v >= next[jj])
-                    && (j == 0 || v > row[j - 1])
-                    && (j + 1 >= m || v >= row[j + 1]);
-                if is_max {
-                    self.candidates.push(Candidate {
-                        k,
-                        j,
-                        score: f64::from(v),
-                        alive: true,
-                    });
+                let prev = h.row((k + n - 1) % n);
+                let next = h.row((k + 1) % n);
+                let start = voted.start + b * BLOCK;
+                for (j, &v) in (start..).zip(block) {
+                    if v < floor {
+                        continue;
+                    }
+                    let lo = j.saturating_sub(1);
+                    let hi = (j + 1).min(m - 1);
+                    // Strictly above the neighbours before, at least the ones after:
+                    // a plateau yields exactly one maximum.
+                    let is_max = (lo..=hi).all(|jj| v > prev[jj] && v >= next[jj])
+                        && (j == 0 || v > row[j - 1])
+                        && (j + 1 >= m || v >= row[j + 1]);
+                    if is_max {
+                        self.candidates.push(Candidate {
+                            k,
+                            j,
+                            score: f64::from(v),
+                            alive: true,
+                        });
+                    }
                 }
             }
         }
@@ -176,6 +192,16 @@ impl RwhtExtractor {
         });
         self.candidates.truncate(self.config.max_candidates);
     }
+}
+
+/// Cells of a row the candidate search checks at once.
+const BLOCK: usize = 16;
+
+/// The smallest `f32` not below `x`: for every `f32` `v`,
+/// `f64::from(v) < x` exactly when `v < f32_at_least(x)`.
+fn f32_at_least(x: f64) -> f32 {
+    let v = x as f32;
+    if f64::from(v) < x { v.next_up() } else { v }
 }
 
 impl WallExtractor for RwhtExtractor {
@@ -200,6 +226,19 @@ impl WallExtractor for RwhtExtractor {
         mark_free_standing(pts, &self.config.fit, &mut self.taken);
         self.spent.clear();
         self.spent.resize(self.segments.len(), false);
+        // What each segment holds taken, kept up to date as walls take
+        // echoes, so that a segment's share is not recounted after each.
+        self.segment_of.clear();
+        self.segment_of.resize(pts.len(), u32::MAX);
+        self.held.clear();
+        for (s, seg) in self.segments.iter().enumerate() {
+            self.segment_of[seg.first..seg.end].fill(s as u32);
+            let held = self.taken[seg.first..seg.end]
+                .iter()
+                .filter(|&&t| t)
+                .count();
+            self.held.push(held as u32);
+        }
         let threshold = self.threshold(points.angle_increment_rad());
         let mut walls = Vec::new();
         // A wall whose cell sits beside a stronger peak is no local maximum
@@ -226,6 +265,7 @@ impl RwhtExtractor {
     /// cell's segments not yet taken, and it is the strongest peak when its
     /// fresh score still beats every other stored one.
     fn take_peaks(&mut self, pts: &[ScanPoint], threshold: f64, walls: &mut Vec<Wall>) {
+        let reach = reach_m(pts);
         while walls.len() < self.config.max_walls {
             let mut order = self
                 .candidates
@@ -266,20 +306,24 @@ impl RwhtExtractor {
                 }
             }
             self.seeds.sort_unstable();
-            let Some(fit) = self
-                .fitter
-                .fit(pts, &self.taken, self.seeds.iter().copied())
+            let Some(fit) =
+                self.fitter
+                    .fit_within(pts, reach, &self.taken, self.seeds.iter().copied())
             else {
                 continue;
             };
             for &i in &fit.support {
-                self.taken[i] = true;
+                if !self.taken[i] {
+                    self.taken[i] = true;
+                    if let Some(held) = self.held.get_mut(self.segment_of[i] as usize) {
+                        *held += 1;
+                    }
+                }
             }
             // A segment is spent once a wall holds most of its echoes.
-            for (seg, spent) in self.segments.iter().zip(&mut self.spent) {
+            for ((seg, spent), &held) in self.segments.iter().zip(&mut self.spent).zip(&self.held) {
                 if !*spent {
-                    let held = (seg.first..seg.end).filter(|&i| self.taken[i]).count();
-                    *spent = 2 * held > seg.len();
+                    *spent = 2 * held as usize > seg.len();
                 }
             }
             walls.push(fit.wall);
