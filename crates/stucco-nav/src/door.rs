@@ -138,10 +138,126 @@ pub fn find_doors(scan: &Scan, walls: &[Wall], cfg: &DoorConfig) -> Vec<DoorOpen
 }
 
 thread_local! {
-    /// The bearings of the scans this thread last searched for doors.
-    static BEARINGS: std::cell::RefCell<crate::points::Bearings> =
-        std::cell::RefCell::default();
+    /// The beams of the scans this thread last searched for doors.
+    static BEAMS: std::cell::RefCell<Beams> = std::cell::RefCell::default();
 }
+
+/// Each beam's origin and direction in the frame at the stamp, kept for
+/// scans of the same geometry swept with the same straight motion.
+#[derive(Default)]
+struct Beams {
+    bearings: crate::points::Bearings,
+    /// What the beams were cast for: the scan's geometry (first bearing,
+    /// step, beams, sweep time) and the twist; `None` after a turning
+    /// sweep, whose beams are not kept.
+    key: Option<[u64; 7]>,
+    rays: Vec<(Vector2<f64>, Vector2<f64>)>,
+    /// Every ray starts at the laser's origin at the stamp.
+    from_origin: bool,
+    /// Index ranges of the rays to search along one wall.
+    near: Vec<std::ops::Range<usize>>,
+}
+
+impl Beams {
+    /// Casts `scan`'s beams for a laser moving with `twist`, or keeps the
+    /// last scan's when they are the same.
+    fn cast(&mut self, scan: &Scan, twist: &Twist2) {
+        let key = [
+            scan.angle_min_rad.to_bits(),
+            scan.angle_increment_rad.to_bits(),
+            scan.len() as u64,
+            scan.sweep_duration_s.to_bits(),
+            twist.vx_mps.to_bits(),
+            twist.vy_mps.to_bits(),
+            twist.omega_radps.to_bits(),
+        ];
+        if self.key == Some(key) && self.rays.len() == scan.len() {
+            return;
+        }
+        self.rays.clear();
+        if twist.omega_radps == 0.0 {
+            // Not turning, the laser keeps its heading: each beam's
+            // bearing's own sine and cosine, worked out once for scans of
+            // its geometry.
+            let sin_cos = self.bearings.of(scan);
+            self.rays
+                .extend(sin_cos.iter().enumerate().map(|(i, &(s, c))| {
+                    let at = twist.displacement(scan.beam_time_s(i));
+                    (Vector2::new(at.x, at.y), Vector2::new(c, s))
+                }));
+            self.key = Some(key);
+        } else {
+            self.rays.extend((0..scan.len()).map(|i| {
+                let at = twist.displacement(scan.beam_time_s(i));
+                let phi = scan.angle(i) + at.theta;
+                (Vector2::new(at.x, at.y), Vector2::new(phi.cos(), phi.sin()))
+            }));
+            self.key = None;
+        }
+        self.from_origin = self.rays.iter().all(|(o, _)| o.x == 0.0 && o.y == 0.0);
+    }
+
+    /// The index ranges, in order, that hold every ray meeting `wall`'s
+    /// line facing it (`cos` of the incidence at least `MIN_COS_INC`)
+    /// between `t_lo` and `t_hi` along it: the others would only end the
+    /// run of crossings, and need not be cast at all. Rays from the
+    /// laser's origin meet the line at `d·tan δ` along it, `δ` the beam's
+    /// angle from the wall's normal; the ranges hold the beams within two
+    /// steps of the angles that can, far beyond any rounding. All rays
+    /// when they do not start at the origin.
+    fn near(&mut self, scan: &Scan, wall: &Wall, t_lo: f64, t_hi: f64) {
+        self.near.clear();
+        let n = self.rays.len();
+        let step = scan.angle_increment_rad;
+        let usable = self.from_origin
+            && step != 0.0
+            && step.is_finite()
+            && scan.angle_min_rad.is_finite()
+            && wall.d_m > 0.0
+            && wall.gamma_rad.is_finite()
+            && t_lo.is_finite()
+            && t_hi.is_finite();
+        if !usable {
+            self.near.push(0..n);
+            return;
+        }
+        let half = MIN_COS_INC.acos();
+        let margin = 2.0 * step.abs() + 1e-6;
+        let from = t_lo.atan2(wall.d_m).max(-half) - margin;
+        let to = t_hi.atan2(wall.d_m).min(half) + margin;
+        if from > to {
+            return;
+        }
+        for turns in -2..=2 {
+            let shift = wall.gamma_rad + f64::from(turns) * std::f64::consts::TAU;
+            let a = (shift + from - scan.angle_min_rad) / step;
+            let b = (shift + to - scan.angle_min_rad) / step;
+            let (lo, hi) = (a.min(b).floor() - 1.0, a.max(b).ceil() + 1.0);
+            if hi < 0.0 || lo > (n as f64 - 1.0) {
+                continue;
+            }
+            self.near
+                .push(lo.max(0.0) as usize..(hi as usize + 1).min(n));
+        }
+        self.near.sort_by_key(|r| r.start);
+        // Touching ranges joined: a run of crossings goes on from one
+        // beam to the next.
+        let mut merged = 0;
+        for k in 1..self.near.len() {
+            if self.near[k].start <= self.near[merged].end {
+                self.near[merged].end = self.near[merged].end.max(self.near[k].end);
+            } else {
+                merged += 1;
+                self.near[merged] = self.near[k].clone();
+            }
+        }
+        self.near.truncate(merged + 1);
+    }
+}
+
+/// A beam meeting a wall's line more obliquely than this (cosine of the
+/// incidence) crosses it nowhere useful.
+const MIN_COS_INC: f64 = 0.05;
 
 /// [`find_doors`] for a laser moving with `twist` (its own frame) during
 /// the sweep, with `walls` in its frame at the scan's stamp (as the walls
@@ -161,88 +277,76 @@ pub fn find_doors_moving(
     if !walls.iter().any(searched) {
         return Vec::new();
     }
-    // Each beam's origin and direction in the frame at the stamp (not
-    // turning, the laser keeps its heading: each beam's bearing's own sine
-    // and cosine, worked out once for scans of its geometry).
-    let beams: Vec<(Vector2<f64>, Vector2<f64>)> = if twist.omega_radps == 0.0 {
-        BEARINGS.with_borrow_mut(|b| {
-            b.of(scan)
-                .iter()
-                .enumerate()
-                .map(|(i, &(s, c))| {
-                    let at = twist.displacement(scan.beam_time_s(i));
-                    (Vector2::new(at.x, at.y), Vector2::new(c, s))
-                })
-                .collect()
-        })
-    } else {
-        (0..scan.len())
-            .map(|i| {
-                let at = twist.displacement(scan.beam_time_s(i));
-                let phi = scan.angle(i) + at.theta;
-                (Vector2::new(at.x, at.y), Vector2::new(phi.cos(), phi.sin()))
-            })
-            .collect()
-    };
-    let mut doors = Vec::new();
-    let gate = 3.0 * cfg.range_sigma_m;
-    let mut run: Vec<Crossing> = Vec::new();
-    let mut order: Vec<usize> = (0..walls.len()).collect();
-    order.sort_by_key(|&w| std::cmp::Reverse(walls[w].points));
-    for wi in order {
-        let wall = &walls[wi];
-        if !searched(wall) {
-            continue;
-        }
-        let n = wall.normal();
-        let u = wall.direction();
-        let t_lo = u.dot(&wall.ends[0].coords) - cfg.max_width_m;
-        let t_hi = u.dot(&wall.ends[1].coords) + cfg.max_width_m;
-        let flush = |run: &mut Vec<Crossing>, doors: &mut Vec<DoorOpening>| {
-            scan_run(run, wi, wall, cfg, doors);
-            run.clear();
-        };
-        for (i, (origin, dir)) in beams.iter().enumerate() {
-            let c = dir.dot(&n);
-            // Distance from where the beam starts to the wall's line.
-            let to_line = wall.d_m - n.dot(origin);
-            if c < 0.05 || to_line <= 0.0 {
-                flush(&mut run, &mut doors);
+    BEAMS.with_borrow_mut(|beams| {
+        beams.cast(scan, twist);
+        let mut doors = Vec::new();
+        let gate = 3.0 * cfg.range_sigma_m;
+        let mut run: Vec<Crossing> = Vec::with_capacity(scan.len());
+        let mut order: Vec<usize> = (0..walls.len()).collect();
+        order.sort_by_key(|&w| std::cmp::Reverse(walls[w].points));
+        for wi in order {
+            let wall = &walls[wi];
+            if !searched(wall) {
                 continue;
             }
-            let r_wall = to_line / c;
-            let t_cross = u.dot(&(origin + dir * r_wall));
-            if t_cross < t_lo || t_cross > t_hi {
+            let n = wall.normal();
+            let u = wall.direction();
+            let t_lo = u.dot(&wall.ends[0].coords) - cfg.max_width_m;
+            let t_hi = u.dot(&wall.ends[1].coords) + cfg.max_width_m;
+            let flush = |run: &mut Vec<Crossing>, doors: &mut Vec<DoorOpening>| {
+                scan_run(run, wi, wall, cfg, doors);
+                run.clear();
+            };
+            beams.near(scan, wall, t_lo, t_hi);
+            for range in &beams.near {
+                for (i, (origin, dir)) in beams.rays[range.clone()]
+                    .iter()
+                    .enumerate()
+                    .map(|(k, ray)| (range.start + k, ray))
+                {
+                    let c = dir.dot(&n);
+                    // Distance from where the beam starts to the wall's line.
+                    let to_line = wall.d_m - n.dot(origin);
+                    if c < MIN_COS_INC || to_line <= 0.0 {
+                        flush(&mut run, &mut doors);
+                        continue;
+                    }
+                    let r_wall = to_line / c;
+                    let t_cross = u.dot(&(origin + dir * r_wall));
+                    if t_cross < t_lo || t_cross > t_hi {
+                        flush(&mut run, &mut doors);
+                        continue;
+                    }
+                    let r = scan.ranges_m[i];
+                    let depth = (r - r_wall) * c;
+                    let class = if r.is_finite() && r < r_wall - gate {
+                        Hit::InFront
+                    } else if r.is_finite() && r <= r_wall + gate {
+                        Hit::OnWall
+                    } else if r.is_finite() && depth <= cfg.max_jamb_depth_m {
+                        Hit::Jamb
+                    } else {
+                        Hit::Through
+                    };
+                    let t_echo = if r.is_finite() {
+                        u.dot(&(origin + dir * r))
+                    } else {
+                        t_cross
+                    };
+                    run.push(Crossing {
+                        t_cross,
+                        t_echo,
+                        class,
+                        r_wall,
+                        cos_inc: c,
+                    });
+                }
+                // The beams between ranges cross nowhere near: the run ends.
                 flush(&mut run, &mut doors);
-                continue;
             }
-            let r = scan.ranges_m[i];
-            let depth = (r - r_wall) * c;
-            let class = if r.is_finite() && r < r_wall - gate {
-                Hit::InFront
-            } else if r.is_finite() && r <= r_wall + gate {
-                Hit::OnWall
-            } else if r.is_finite() && depth <= cfg.max_jamb_depth_m {
-                Hit::Jamb
-            } else {
-                Hit::Through
-            };
-            let t_echo = if r.is_finite() {
-                u.dot(&(origin + dir * r))
-            } else {
-                t_cross
-            };
-            run.push(Crossing {
-                t_cross,
-                t_echo,
-                class,
-                r_wall,
-                cos_inc: c,
-            });
         }
-        flush(&mut run, &mut doors);
-    }
-    doors
+        doors
+    })
 }
 
 /// Stray beams through a wall (noise, a mixed echo) that do not end a
