@@ -79,6 +79,8 @@ pub(crate) struct LineFitter {
     /// while the fit's line stays within `margin` of it over the scan's
     /// reach, every measurement within `cut` of the line is among them.
     pool: Vec<usize>,
+    /// The pool's points, in its order.
+    pool_coords: Vec<Vector2<f64>>,
     pool_line: Option<Line>,
     reach_m: f64,
     /// The candidates' points, in their order, and the weighted sums of
@@ -89,6 +91,7 @@ pub(crate) struct LineFitter {
     /// The candidates before the last selection, and the inliers of the
     /// final fit (buffers).
     previous: Vec<usize>,
+    previous_coords: Vec<Vector2<f64>>,
     inliers: Vec<usize>,
     keep: Vec<usize>,
 }
@@ -181,7 +184,7 @@ impl LineFitter {
                 if chained {
                     break;
                 }
-                if !self.keep_longest_run(pts, line) {
+                if !self.keep_longest_run(line) {
                     break;
                 }
                 chained = true;
@@ -191,7 +194,7 @@ impl LineFitter {
             // Unsettled (a few echoes at the cut-off going in and out): the
             // last line's gap-free run, refitted if cut.
             self.select(pts, taken, line, cut, false);
-            if self.keep_longest_run(pts, line) {
+            if self.keep_longest_run(line) {
                 line = weighted_tls(pts, &self.candidates, &self.weights)?;
             }
         }
@@ -216,13 +219,23 @@ impl LineFitter {
                     > margin
             });
             if stale {
-                self.pool.clear();
+                // Written in place whether kept or not, and cut to those
+                // kept: whether an echo is near the line is no branch to
+                // predict.
+                let n = pts.len();
+                self.pool.resize(n, 0);
+                self.pool_coords.resize(n, Vector2::zeros());
+                let (pool, coords) = (&mut self.pool[..n], &mut self.pool_coords[..n]);
                 let reach = cut + margin;
-                for (i, (p, &t)) in pts.iter().zip(taken).enumerate() {
-                    if !t && line.residual(&p.p).abs() < reach {
-                        self.pool.push(i);
-                    }
+                let mut kept = 0;
+                for (i, (p, &t)) in pts.iter().zip(&taken[..n]).enumerate() {
+                    let near = !t & (line.residual(&p.p).abs() < reach);
+                    pool[kept] = i;
+                    coords[kept] = p.p.coords;
+                    kept += usize::from(near);
                 }
+                self.pool.truncate(kept);
+                self.pool_coords.truncate(kept);
                 self.pool_line = Some(line);
             }
         }
@@ -230,30 +243,44 @@ impl LineFitter {
         // weight, the point and the sums the fit's centroid needs, in the
         // order the fit takes them.
         std::mem::swap(&mut self.previous, &mut self.candidates);
-        let source = if within_run {
-            &self.previous
+        std::mem::swap(&mut self.previous_coords, &mut self.coords);
+        let (source, source_coords) = if within_run {
+            (&self.previous, &self.previous_coords)
         } else {
-            &self.pool
+            (&self.pool, &self.pool_coords)
         };
-        self.candidates.clear();
-        self.weights.clear();
-        self.coords.clear();
+        // Room for every one, written in place whether kept or not and cut
+        // to those kept (no branch to predict). An echo dropped adds a
+        // weight of zero to the sums: +0 or −0, which leaves a sum that
+        // starts at +0 as it is, bit for bit.
+        let n = source.len();
+        self.candidates.resize(n, 0);
+        self.weights.resize(n, 0.0);
+        self.coords.resize(n, Vector2::zeros());
+        let (candidates, weights, coords) = (
+            &mut self.candidates[..n],
+            &mut self.weights[..n],
+            &mut self.coords[..n],
+        );
+        let mut kept = 0;
         let mut sw = 0.0;
         let mut c = Vector2::zeros();
-        for &i in source {
-            let p = pts[i].p.coords;
+        for (&i, &p) in source.iter().zip(source_coords) {
             let r = line.normal.dot(&p) - line.d;
-            if r.abs() < cut {
-                let u = r / cut;
-                let t = 1.0 - u * u;
-                let w = t * t;
-                self.candidates.push(i);
-                self.weights.push(w);
-                self.coords.push(p);
-                sw += w;
-                c += p * w;
-            }
+            let inside = r.abs() < cut;
+            let u = r / cut;
+            let t = 1.0 - u * u;
+            let w = if inside { t * t } else { 0.0 };
+            candidates[kept] = i;
+            weights[kept] = w;
+            coords[kept] = p;
+            kept += usize::from(inside);
+            sw += w;
+            c += p * w;
         }
+        self.candidates.truncate(kept);
+        self.weights.truncate(kept);
+        self.coords.truncate(kept);
         self.sums = (sw, c);
     }
 
@@ -276,16 +303,13 @@ impl LineFitter {
     /// within `free_standing_max_m` beyond a gap of `end_gap_m` at either
     /// end, when they would lengthen it by more than `end_growth_max`.
     /// Returns whether anything was dropped.
-    fn keep_longest_run(&mut self, pts: &[ScanPoint], line: Line) -> bool {
+    fn keep_longest_run(&mut self, line: Line) -> bool {
         let u = line.normal();
         let dir = Vector2::new(-u.y, u.x);
         self.along.clear();
-        self.along.extend(
-            self.candidates
-                .iter()
-                .enumerate()
-                .map(|(k, &i)| (dir.dot(&pts[i].p.coords), k)),
-        );
+        // The candidates' points, taken with them in the last selection.
+        self.along
+            .extend(self.coords.iter().enumerate().map(|(k, p)| (dir.dot(p), k)));
         self.along.sort_by(|a, b| a.0.total_cmp(&b.0));
         let (mut best, mut best_w) = ((0, 0), -1.0);
         let mut start = 0;
@@ -332,9 +356,11 @@ impl LineFitter {
         for (to, &k) in self.keep.iter().enumerate() {
             self.candidates[to] = self.candidates[k];
             self.weights[to] = self.weights[k];
+            self.coords[to] = self.coords[k];
         }
         self.candidates.truncate(self.keep.len());
         self.weights.truncate(self.keep.len());
+        self.coords.truncate(self.keep.len());
         true
     }
 

@@ -88,6 +88,13 @@ pub struct RwhtExtractor {
     segment_of: Vec<u32>,
     /// Echoes of each segment taken so far.
     held: Vec<u32>,
+    /// The segments a peak's fit rested on, and the sets of them whose fit
+    /// found no wall since a wall last took echoes (one after the other,
+    /// each set's end in `failed_ends`): a fit on the same echoes, none
+    /// taken since, finds none again.
+    voters: Vec<u32>,
+    failed: Vec<u32>,
+    failed_ends: Vec<usize>,
     candidates: Vec<Candidate>,
     seeds: Vec<usize>,
 }
@@ -116,6 +123,9 @@ impl RwhtExtractor {
             taken: Vec::new(),
             segment_of: Vec::new(),
             held: Vec::new(),
+            voters: Vec::new(),
+            failed: Vec::new(),
+            failed_ends: Vec::new(),
             candidates: Vec::new(),
             seeds: Vec::new(),
         })
@@ -153,15 +163,14 @@ impl RwhtExtractor {
         // of cells at a time, and blocks with no cell that high skipped.
         let floor = f32_at_least(threshold);
         for k in 0..n {
-            let row = h.row(k);
+            let row = h.voted_row(k);
             let voted = h.voted(k);
             // Cells without votes are zero, under any threshold.
-            for (b, block) in row[voted.clone()].chunks(BLOCK).enumerate() {
+            for (b, block) in row.chunks(BLOCK).enumerate() {
                 if !block.iter().fold(false, |any, &v| any | (v >= floor)) {
                     continue;
                 }
-                let prev = h.row((k + n - 1) % n);
-                let next = h.row((k + 1) % n);
+                let (prev, next) = ((k + n - 1) % n, (k + 1) % n);
                 let start = voted.start + b * BLOCK;
                 for (j, &v) in (start..).zip(block) {
                     if v < floor {
@@ -171,9 +180,9 @@ impl RwhtExtractor {
                     let hi = (j + 1).min(m - 1);
                     // Strictly above the neighbours before, at least the ones after:
                     // a plateau yields exactly one maximum.
-                    let is_max = (lo..=hi).all(|jj| v > prev[jj] && v >= next[jj])
-                        && (j == 0 || v > row[j - 1])
-                        && (j + 1 >= m || v >= row[j + 1]);
+                    let is_max = (lo..=hi).all(|jj| v > h.cell(prev, jj) && v >= h.cell(next, jj))
+                        && (j == 0 || v > h.cell(k, j - 1))
+                        && (j + 1 >= m || v >= h.cell(k, j + 1));
                     if is_max {
                         self.candidates.push(Candidate {
                             k,
@@ -228,6 +237,8 @@ impl WallExtractor for RwhtExtractor {
         self.spent.resize(self.segments.len(), false);
         // What each segment holds taken, kept up to date as walls take
         // echoes, so that a segment's share is not recounted after each.
+        self.failed.clear();
+        self.failed_ends.clear();
         self.segment_of.clear();
         self.segment_of.resize(pts.len(), u32::MAX);
         self.held.clear();
@@ -298,20 +309,39 @@ impl RwhtExtractor {
                 continue;
             }
             self.candidates[best.0].alive = false;
-            self.seeds.clear();
+            // The fit's seeds are the echoes of the live segments voting
+            // for the cell (in scan order): the segments say which.
+            self.voters.clear();
             for (s, _) in self.transform.votes_in(k, j) {
                 if !self.spent[s] {
-                    let seg = &self.segments[s];
-                    self.seeds.extend(seg.first..seg.end);
+                    self.voters.push(s as u32);
                 }
+            }
+            let mut from = 0;
+            let tried = self.failed_ends.iter().any(|&end| {
+                let same = self.failed[from..end] == self.voters[..];
+                from = end;
+                same
+            });
+            if tried {
+                continue;
+            }
+            self.seeds.clear();
+            for &s in &self.voters {
+                let seg = &self.segments[s as usize];
+                self.seeds.extend(seg.first..seg.end);
             }
             self.seeds.sort_unstable();
             let Some(fit) =
                 self.fitter
                     .fit_within(pts, reach, &self.taken, self.seeds.iter().copied())
             else {
+                self.failed.extend_from_slice(&self.voters);
+                self.failed_ends.push(self.failed.len());
                 continue;
             };
+            self.failed.clear();
+            self.failed_ends.clear();
             for &i in &fit.support {
                 if !self.taken[i] {
                     self.taken[i] = true;

@@ -233,11 +233,20 @@ struct SegmentVote {
 /// run evenly from one end's to the other's, and a cell gets the share of
 /// the segment's weight whose distances lie within the window `a` of it —
 /// what the echo-wise transform would give, with the echoes spread evenly.
+///
+/// Only the cells a row's votes span are stored, row after row in one
+/// buffer (a few hundred cells a scan, where the whole grid out to the
+/// farthest echo holds a hundred thousand): every other cell is zero.
+/// Votes are gathered first, then laid down row by row in the segments'
+/// order, so that each cell sums the same weights in the same order as
+/// over the whole grid.
 #[derive(Clone, Debug)]
 pub struct SegmentTransform {
     config: HoughConfig,
     distance_bins: usize,
-    acc: Vec<f32>,
+    /// The voted cells, row after row: row `k`'s `voted[k]` from `start[k]`.
+    cells: Vec<f32>,
+    start: Vec<usize>,
     voted: Vec<(usize, usize)>,
     row_votes: Vec<Vec<SegmentVote>>,
     /// Unit normals at the lower edge of each angle bin, `γ_k − ½Δγ`.
@@ -262,7 +271,8 @@ impl SegmentTransform {
             config,
             max_reach_rad,
             distance_bins: 0,
-            acc: Vec::new(),
+            cells: Vec::new(),
+            start: vec![0; n],
             voted: vec![(0, 0); n],
             row_votes: vec![Vec::new(); n],
         }
@@ -278,9 +288,11 @@ impl SegmentTransform {
         self.distance_bins
     }
 
-    /// One row of the accumulator.
-    pub fn row(&self, k: usize) -> &[f32] {
-        &self.acc[k * self.distance_bins..(k + 1) * self.distance_bins]
+    /// The cells of row `k` its votes span, [`SegmentTransform::voted`]:
+    /// the rest of the row is zero.
+    pub fn voted_row(&self, k: usize) -> &[f32] {
+        let (lo, hi) = self.voted[k];
+        &self.cells[self.start[k]..self.start[k] + (hi - lo)]
     }
 
     /// The distance bins of row `k` that hold votes.
@@ -289,9 +301,19 @@ impl SegmentTransform {
         lo..hi
     }
 
+    /// The value of cell `(k, j)`, as stored.
+    pub fn cell(&self, k: usize, j: usize) -> f32 {
+        let (lo, hi) = self.voted[k];
+        if (lo..hi).contains(&j) {
+            self.cells[self.start[k] + j - lo]
+        } else {
+            0.0
+        }
+    }
+
     /// The value of cell `(k, j)`.
     pub fn value(&self, k: usize, j: usize) -> f64 {
-        f64::from(self.acc[k * self.distance_bins + j])
+        f64::from(self.cell(k, j))
     }
 
     /// Computes the transform of the segments `live` keeps.
@@ -305,20 +327,9 @@ impl SegmentTransform {
             .iter()
             .flat_map(|s| s.ends.iter().map(|e| e.coords.norm()))
             .fold(0.0, f64::max);
-        // The grid only grows: cells past the farthest segment stay zero,
-        // and clearing what the last scan voted for is cheaper than the
-        // whole accumulator.
+        // The grid only grows (cells past the farthest segment stay zero).
         let bins = ((far + a) / res).ceil() as usize + 2;
-        if bins > self.distance_bins {
-            self.distance_bins = bins;
-            self.acc.clear();
-            self.acc.resize(bins * n, 0.0);
-        } else {
-            let m = self.distance_bins;
-            for (k, &(lo, hi)) in self.voted.iter().enumerate() {
-                self.acc[k * m + lo..k * m + hi].fill(0.0);
-            }
-        }
+        self.distance_bins = self.distance_bins.max(bins);
         let bins = self.distance_bins;
         self.voted.iter_mut().for_each(|v| *v = (usize::MAX, 0));
         self.row_votes.iter_mut().for_each(Vec::clear);
@@ -327,9 +338,9 @@ impl SegmentTransform {
                 continue;
             }
             let reach = (3.0 * seg.sigma_gamma_rad).min(self.max_reach_rad);
-            let own = (seg.gamma_rad / step + 0.5).floor() as i64;
-            let first = ((seg.gamma_rad - reach) / step + 0.5).floor() as i64;
-            let last = ((seg.gamma_rad + reach) / step + 0.5).floor() as i64;
+            let own = floor_i64(seg.gamma_rad / step + 0.5);
+            let first = floor_i64((seg.gamma_rad - reach) / step + 0.5);
+            let last = floor_i64((seg.gamma_rad + reach) / step + 0.5);
             for kk in first..=last {
                 let k = kk.rem_euclid(n as i64) as usize;
                 // The line of the cell nearest the segment's own: its own
@@ -352,30 +363,45 @@ impl SegmentTransform {
                         seg.len() as f64 * u.dot(&seg.centroid.coords).max(0.0)
                     }
                 };
-                let lo = ((rlo - a) / res).floor().max(0.0) as usize;
-                let hi = (((rhi + a) / res).floor() as usize).min(bins - 2);
+                // The floor of a distance bin, as a cast: it truncates
+                // toward zero and takes what is below zero (and NaN) to 0,
+                // as the floor clamped at zero does.
+                let lo = ((rlo - a) / res) as usize;
+                let hi = (((rhi + a) / res) as usize).min(bins - 2);
                 if hi < lo || weight <= 0.0 {
                     continue;
                 }
-                let vote = SegmentVote {
+                self.row_votes[k].push(SegmentVote {
                     segment: s as u32,
                     lo: lo as u32,
                     hi: hi as u32,
                     rho: [rlo, rhi],
                     weight,
-                };
-                let row = &mut self.acc[k * bins..(k + 1) * bins];
-                for (j, cell) in row.iter_mut().enumerate().take(hi + 1).skip(lo) {
-                    *cell += share(&vote, j, res, a) as f32;
-                }
-                self.row_votes[k].push(vote);
+                });
                 let v = &mut self.voted[k];
                 *v = (v.0.min(lo), v.1.max(hi + 1));
             }
         }
-        for v in &mut self.voted {
+        // Room for the cells each row's votes span, then the votes laid
+        // down row by row, each row's in the segments' order.
+        let mut total = 0;
+        for (v, start) in self.voted.iter_mut().zip(&mut self.start) {
             if v.0 >= v.1 {
                 *v = (0, 0);
+            }
+            *start = total;
+            total += v.1 - v.0;
+        }
+        self.cells.clear();
+        self.cells.resize(total, 0.0);
+        for (k, votes) in self.row_votes.iter().enumerate() {
+            let (from, start) = (self.voted[k].0, self.start[k]);
+            for vote in votes {
+                let (lo, hi) = (vote.lo as usize, vote.hi as usize);
+                let row = &mut self.cells[start + lo - from..=start + hi - from];
+                for (j, cell) in (lo..).zip(row) {
+                    *cell += share(vote, j, res, a) as f32;
+                }
             }
         }
     }
@@ -395,6 +421,18 @@ impl SegmentTransform {
     pub fn gamma(&self, k: usize) -> f64 {
         let g = k as f64 * self.config.angle_resolution_rad();
         if g > PI { g - 2.0 * PI } else { g }
+    }
+}
+
+/// `x.floor() as i64`, without a call to the C library's `floor`: the
+/// truncation, one less for a negative fraction (the same for every `x`,
+/// NaN and out of range ones included).
+fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x {
+        t.saturating_sub(1)
+    } else {
+        t
     }
 }
 
