@@ -255,9 +255,13 @@ impl WallExtractor for RwhtExtractor {
         // A wall whose cell sits beside a stronger peak is no local maximum
         // until that peak's segments are gone: when the peaks of one
         // transform are used up, transform what is left and search again.
-        for _ in 0..self.config.max_passes {
+        for pass in 0..self.config.max_passes {
             let spent = &self.spent;
-            self.transform.compute(&self.segments, |s| !spent[s]);
+            if pass == 0 {
+                self.transform.compute(&self.segments, |s| !spent[s]);
+            } else {
+                self.transform.keep_only(|s| !spent[s]);
+            }
             self.find_candidates(threshold);
             let before = walls.len();
             self.take_peaks(pts, threshold, &mut walls);

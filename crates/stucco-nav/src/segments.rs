@@ -382,8 +382,27 @@ impl SegmentTransform {
                 *v = (v.0.min(lo), v.1.max(hi + 1));
             }
         }
-        // Room for the cells each row's votes span, then the votes laid
-        // down row by row, each row's in the segments' order.
+        self.lay_down();
+    }
+
+    /// The transform of the segments of the last [`SegmentTransform::compute`]
+    /// that `live` still keeps: the same as computing it again with them
+    /// (each kept vote is what it was, on the same grid), without working
+    /// out their votes again.
+    pub fn keep_only(&mut self, live: impl Fn(usize) -> bool) {
+        for (votes, v) in self.row_votes.iter_mut().zip(&mut self.voted) {
+            votes.retain(|vote| live(vote.segment as usize));
+            *v = votes.iter().fold((usize::MAX, 0), |(lo, hi), vote| {
+                (lo.min(vote.lo as usize), hi.max(vote.hi as usize + 1))
+            });
+        }
+        self.lay_down();
+    }
+
+    /// Room for the cells each row's votes span, then the votes laid down
+    /// row by row, each row's in the segments' order.
+    fn lay_down(&mut self) {
+        let (res, a) = (self.config.distance_resolution_m, self.config.half_window_m);
         let mut total = 0;
         for (v, start) in self.voted.iter_mut().zip(&mut self.start) {
             if v.0 >= v.1 {
