@@ -94,6 +94,48 @@ pub(crate) struct LineFitter {
     previous_coords: Vec<Vector2<f64>>,
     inliers: Vec<usize>,
     keep: Vec<usize>,
+    /// What [`LineFitter::fit`] fits on.
+    untaken: Untaken,
+}
+
+/// The measurements of a scan no wall has taken yet, in scan order, with
+/// their points, and the scan's reach: what a fit may take.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Untaken {
+    idx: Vec<usize>,
+    coords: Vec<Vector2<f64>>,
+    /// The farthest measurement's range (taken or not), m.
+    reach_m: f64,
+}
+
+impl Untaken {
+    /// The measurements of `pts` not `taken`.
+    pub fn fill(&mut self, pts: &[ScanPoint], taken: &[bool]) {
+        self.idx.clear();
+        self.coords.clear();
+        for (i, (p, &t)) in pts.iter().zip(taken).enumerate() {
+            if !t {
+                self.idx.push(i);
+                self.coords.push(p.p.coords);
+            }
+        }
+        self.reach_m = reach_m(pts);
+    }
+
+    /// Drops those `taken` since.
+    pub fn drop_taken(&mut self, taken: &[bool]) {
+        let mut kept = 0;
+        for k in 0..self.idx.len() {
+            let i = self.idx[k];
+            if !taken[i] {
+                self.idx[kept] = i;
+                self.coords[kept] = self.coords[k];
+                kept += 1;
+            }
+        }
+        self.idx.truncate(kept);
+        self.coords.truncate(kept);
+    }
 }
 
 /// A line in normal form, `n(γ)·p = d`, with its normal at hand.
@@ -140,15 +182,20 @@ impl LineFitter {
         taken: &[bool],
         seeds: impl IntoIterator<Item = usize>,
     ) -> Option<LineFit> {
-        self.fit_within(pts, reach_m(pts), taken, seeds)
+        let mut untaken = std::mem::take(&mut self.untaken);
+        untaken.fill(pts, taken);
+        let fit = self.fit_within(pts, &untaken, taken, seeds);
+        self.untaken = untaken;
+        fit
     }
 
-    /// [`LineFitter::fit`] with the scan's reach, [`reach_m`] of `pts`,
-    /// worked out once for all the fits of a scan.
+    /// [`LineFitter::fit`] with the measurements not `taken` listed
+    /// ([`Untaken::fill`]), once for all the fits of a scan between two
+    /// walls taken.
     pub fn fit_within(
         &mut self,
         pts: &[ScanPoint],
-        reach_m: f64,
+        untaken: &Untaken,
         taken: &[bool],
         seeds: impl IntoIterator<Item = usize>,
     ) -> Option<LineFit> {
@@ -162,7 +209,7 @@ impl LineFitter {
         self.candidates
             .extend(seeds.into_iter().filter(|&i| !taken[i]));
         self.pool_line = None;
-        self.reach_m = reach_m;
+        self.reach_m = untaken.reach_m;
         if self.candidates.len() < min_points {
             return None;
         }
@@ -173,7 +220,7 @@ impl LineFitter {
         // heaviest gap-free run and refit on it.
         let mut chained = false;
         for _ in 0..max_iterations {
-            self.select(pts, taken, line, cut, chained);
+            self.select(untaken, line, cut, chained);
             if self.candidates.len() < min_points {
                 return None;
             }
@@ -193,7 +240,7 @@ impl LineFitter {
         if !chained {
             // Unsettled (a few echoes at the cut-off going in and out): the
             // last line's gap-free run, refitted if cut.
-            self.select(pts, taken, line, cut, false);
+            self.select(untaken, line, cut, false);
             if self.keep_longest_run(line) {
                 line = weighted_tls(pts, &self.candidates, &self.weights)?;
             }
@@ -204,14 +251,7 @@ impl LineFitter {
     /// Candidates within `cut` of `line`, with their Tukey weights, their
     /// points and the weighted sums of them. With `within_run`, only the
     /// current candidates are reconsidered.
-    fn select(
-        &mut self,
-        pts: &[ScanPoint],
-        taken: &[bool],
-        line: Line,
-        cut: f64,
-        within_run: bool,
-    ) {
+    fn select(&mut self, untaken: &Untaken, line: Line, cut: f64, within_run: bool) {
         if !within_run {
             let margin = cut;
             let stale = self.pool_line.is_none_or(|r| {
@@ -222,16 +262,16 @@ impl LineFitter {
                 // Written in place whether kept or not, and cut to those
                 // kept: whether an echo is near the line is no branch to
                 // predict.
-                let n = pts.len();
+                let n = untaken.idx.len();
                 self.pool.resize(n, 0);
                 self.pool_coords.resize(n, Vector2::zeros());
                 let (pool, coords) = (&mut self.pool[..n], &mut self.pool_coords[..n]);
                 let reach = cut + margin;
                 let mut kept = 0;
-                for (i, (p, &t)) in pts.iter().zip(&taken[..n]).enumerate() {
-                    let near = !t & (line.residual(&p.p).abs() < reach);
+                for (&i, &p) in untaken.idx.iter().zip(&untaken.coords) {
+                    let near = (line.normal.dot(&p) - line.d).abs() < reach;
                     pool[kept] = i;
-                    coords[kept] = p.p.coords;
+                    coords[kept] = p;
                     kept += usize::from(near);
                 }
                 self.pool.truncate(kept);

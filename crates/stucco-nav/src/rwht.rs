@@ -10,7 +10,7 @@
 use crate::NavError;
 use crate::extractor::WallExtractor;
 use crate::hough::{HoughConfig, Weighting};
-use crate::line_fit::{FitConfig, LineFitter, mark_free_standing, reach_m};
+use crate::line_fit::{FitConfig, LineFitter, Untaken, mark_free_standing};
 use crate::points::{ScanPoint, ScanPoints};
 use crate::segments::{Segment, SegmentTransform, Segmenter};
 use crate::wall::Wall;
@@ -88,6 +88,8 @@ pub struct RwhtExtractor {
     segment_of: Vec<u32>,
     /// Echoes of each segment taken so far.
     held: Vec<u32>,
+    /// The echoes no wall has taken yet.
+    untaken: Untaken,
     /// The segments a peak's fit rested on, and the sets of them whose fit
     /// found no wall since a wall last took echoes (one after the other,
     /// each set's end in `failed_ends`): a fit on the same echoes, none
@@ -123,6 +125,7 @@ impl RwhtExtractor {
             taken: Vec::new(),
             segment_of: Vec::new(),
             held: Vec::new(),
+            untaken: Untaken::default(),
             voters: Vec::new(),
             failed: Vec::new(),
             failed_ends: Vec::new(),
@@ -250,6 +253,7 @@ impl WallExtractor for RwhtExtractor {
                 .count();
             self.held.push(held as u32);
         }
+        self.untaken.fill(pts, &self.taken);
         let threshold = self.threshold(points.angle_increment_rad());
         let mut walls = Vec::new();
         // A wall whose cell sits beside a stronger peak is no local maximum
@@ -280,7 +284,6 @@ impl RwhtExtractor {
     /// cell's segments not yet taken, and it is the strongest peak when its
     /// fresh score still beats every other stored one.
     fn take_peaks(&mut self, pts: &[ScanPoint], threshold: f64, walls: &mut Vec<Wall>) {
-        let reach = reach_m(pts);
         while walls.len() < self.config.max_walls {
             let mut order = self
                 .candidates
@@ -338,7 +341,7 @@ impl RwhtExtractor {
             self.seeds.sort_unstable();
             let Some(fit) =
                 self.fitter
-                    .fit_within(pts, reach, &self.taken, self.seeds.iter().copied())
+                    .fit_within(pts, &self.untaken, &self.taken, self.seeds.iter().copied())
             else {
                 self.failed.extend_from_slice(&self.voters);
                 self.failed_ends.push(self.failed.len());
@@ -354,6 +357,7 @@ impl RwhtExtractor {
                     }
                 }
             }
+            self.untaken.drop_taken(&self.taken);
             // A segment is spent once a wall holds most of its echoes.
             for ((seg, spent), &held) in self.segments.iter().zip(&mut self.spent).zip(&self.held) {
                 if !*spent {
