@@ -20,6 +20,7 @@ fn intel_log_walls_are_consistent_across_scans() {
         log: intel(),
         extractor: ExtractorKind::Rwht,
         out: Some(out.path().to_path_buf()),
+        baseline: false,
     };
     let report = run_walls(&job, |_| {}).unwrap();
     assert_eq!(report.scans, 910);
@@ -60,6 +61,7 @@ fn malformed_log_is_refused_with_file_line_and_field() {
         log: path.clone(),
         extractor: ExtractorKind::Rwht,
         out: None,
+        baseline: false,
     };
     let err = format!("{:#}", run_walls(&job, |_| {}).unwrap_err());
     assert!(

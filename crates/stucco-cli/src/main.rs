@@ -44,6 +44,11 @@ enum Command {
         /// Print the report as one JSON object on stdout.
         #[arg(long)]
         json: bool,
+        /// Run the previous implementation of the RWHT extractor and the
+        /// door search instead (`stucco_nav::baseline`), to time and
+        /// compare them side by side.
+        #[arg(long)]
+        baseline: bool,
     },
     /// Run a mission in the simulator — its tasks carried out by the
     /// executive, or one of the navigation experiments — seeds in
@@ -1543,6 +1548,7 @@ fn main() -> ExitCode {
             extractor,
             out,
             json,
+            baseline,
         } => {
             let bar = ProgressBar::new_spinner().with_style(
                 ProgressStyle::with_template("{spinner} {pos} scans {per_sec} {msg}")
@@ -1553,6 +1559,7 @@ fn main() -> ExitCode {
                 log,
                 extractor,
                 out,
+                baseline,
             };
             let result = run_walls(&job, |n| {
                 if n % 64 == 0 {

@@ -13,7 +13,7 @@ use std::time::Instant;
 use stucco_core::{LaserSpec, Pose2, wrap_angle};
 use stucco_nav::{
     DoorConfig, DoorOpening, FitConfig, HoughConfig, RansacConfig, RansacExtractor, RwhtConfig,
-    RwhtExtractor, ScanPoints, Wall, WallExtractor, find_doors,
+    RwhtExtractor, ScanPoints, Wall, WallExtractor, baseline, find_doors,
 };
 
 /// Which wall extractor `stucco walls` runs, or a study maps on.
@@ -48,6 +48,10 @@ pub struct WallsJob {
     pub extractor: ExtractorKind,
     /// Where to write `walls.jsonl` and `walls.svg`, if anywhere.
     pub out: Option<PathBuf>,
+    /// Run the implementation the RWHT extractor and the door search
+    /// replaced (`stucco_nav::baseline`) instead, to time them side by
+    /// side and compare what they write.
+    pub baseline: bool,
 }
 
 /// The summary `stucco walls --json` prints.
@@ -57,6 +61,8 @@ pub struct WallsReport {
     pub log: String,
     /// The extractor run.
     pub extractor: ExtractorKind,
+    /// True when it was the previous implementation (`--baseline`).
+    pub baseline: bool,
     /// Scans processed.
     pub scans: usize,
     /// Mean number of walls per scan.
@@ -91,23 +97,32 @@ pub(crate) fn laser_for_logs() -> LaserSpec {
     }
 }
 
-/// Builds the extractor `kind` for scans of `laser`.
-pub fn make_extractor(kind: ExtractorKind, laser: &LaserSpec) -> Result<Box<dyn WallExtractor>> {
-    let fit = FitConfig {
+/// The robust fit's settings for scans of `laser`.
+fn fit_config(laser: &LaserSpec) -> FitConfig {
+    FitConfig {
         noise_sigma_m: laser.range_sigma_m,
         ..FitConfig::default()
-    };
+    }
+}
+
+/// The RWHT extractor's settings for scans of `laser`.
+fn rwht_config(laser: &LaserSpec) -> RwhtConfig {
+    RwhtConfig {
+        hough: HoughConfig {
+            surface_noise_m: laser.range_sigma_m,
+            ..HoughConfig::default()
+        },
+        fit: fit_config(laser),
+        ..RwhtConfig::default()
+    }
+}
+
+/// Builds the extractor `kind` for scans of `laser`.
+pub fn make_extractor(kind: ExtractorKind, laser: &LaserSpec) -> Result<Box<dyn WallExtractor>> {
     Ok(match kind {
-        ExtractorKind::Rwht => Box::new(RwhtExtractor::new(RwhtConfig {
-            hough: HoughConfig {
-                surface_noise_m: laser.range_sigma_m,
-                ..HoughConfig::default()
-            },
-            fit,
-            ..RwhtConfig::default()
-        })?),
+        ExtractorKind::Rwht => Box::new(RwhtExtractor::new(rwht_config(laser))?),
         ExtractorKind::Ransac => Box::new(RansacExtractor::new(RansacConfig {
-            fit,
+            fit: fit_config(laser),
             ..RansacConfig::default()
         })?),
     })
@@ -147,7 +162,22 @@ impl From<&Wall> for WallRecord {
 /// Runs the job; `progress(done, line)` is called after every scan.
 pub fn run_walls(job: &WallsJob, mut progress: impl FnMut(usize)) -> Result<WallsReport> {
     let laser = laser_for_logs();
-    let mut extractor = make_extractor(job.extractor, &laser)?;
+    let mut extractor: Box<dyn WallExtractor> = if job.baseline {
+        anyhow::ensure!(
+            job.extractor == ExtractorKind::Rwht,
+            "--baseline is the RWHT extractor's previous implementation, not {}'s",
+            job.extractor
+        );
+        Box::new(baseline::RwhtExtractor::new(rwht_config(&laser))?)
+    } else {
+        make_extractor(job.extractor, &laser)?
+    };
+    let doors_of: fn(&stucco_core::Scan, &[Wall], &DoorConfig) -> Vec<DoorOpening> = if job.baseline
+    {
+        baseline::find_doors
+    } else {
+        find_doors
+    };
     let doors_cfg = DoorConfig::for_laser(&laser);
     let reader = open_carmen_file(&job.log)?;
     let mut jsonl = match &job.out {
@@ -179,7 +209,7 @@ pub fn run_walls(job: &WallsJob, mut progress: impl FnMut(usize)) -> Result<Wall
         let start = Instant::now();
         points.fill(&scan);
         let walls = extractor.extract(&points);
-        let doors = find_doors(&scan, &walls, &doors_cfg);
+        let doors = doors_of(&scan, &walls, &doors_cfg);
         times_us.push(start.elapsed().as_secs_f64() * 1e6);
         n_walls += walls.len();
         n_doors += doors.len();
@@ -219,6 +249,7 @@ pub fn run_walls(job: &WallsJob, mut progress: impl FnMut(usize)) -> Result<Wall
     Ok(WallsReport {
         log: job.log.display().to_string(),
         extractor: job.extractor,
+        baseline: job.baseline,
         scans,
         walls_per_scan: n_walls as f64 / scans as f64,
         doors_per_scan: n_doors as f64 / scans as f64,
