@@ -72,54 +72,6 @@ const RUN_OFF_LINE_RAD: f64 = 0.1;
 const AT_GOAL_M: f64 = 0.01;
 const AT_GOAL_RAD: f64 = 0.01;
 
-/// A sweep of poses from a clear one outward (a turn's angle, a run's
-/// length), checked at most a step apart and each once, for moves of
-/// growing reach out the same way.
-#[derive(Clone, Copy, Debug)]
-struct Sweep {
-    step: f64,
-    /// How far the sweep is known clear (its start is).
-    clear: f64,
-    /// Whether a pose short of some reach asked for was not.
-    blocked: bool,
-}
-
-impl Sweep {
-    fn new(step: f64) -> Self {
-        Sweep {
-            step,
-            clear: 0.0,
-            blocked: false,
-        }
-    }
-
-    /// True when every pose to `reach` is clear as `free` tells: those on
-    /// the step's grid past what is known, and `reach` itself.
-    fn clear_to(&mut self, reach: f64, free: impl Fn(f64) -> bool) -> bool {
-        if self.blocked {
-            return false;
-        }
-        if reach <= self.clear {
-            return true;
-        }
-        let mut k = (self.clear / self.step).floor() + 1.0;
-        while k * self.step < reach {
-            if !free(k * self.step) {
-                self.blocked = true;
-                return false;
-            }
-            self.clear = k * self.step;
-            k += 1.0;
-        }
-        if !free(reach) {
-            self.blocked = true;
-            return false;
-        }
-        self.clear = reach;
-        true
-    }
-}
-
 /// One move of a manoeuvre.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Move {
@@ -734,16 +686,11 @@ impl<'a> Space<'a> {
             }
             let p = pose.position().coords;
             let mut next = Vec::new();
-            // Each way round, and each way along, the poses are checked
-            // outward from the robot once for all the moves that way (a
-            // search that finds no way checks every pose it can reach).
             if turned != Some(true) {
-                let mut sweeps = [Sweep::new(TURN_STEP_RAD), Sweep::new(TURN_STEP_RAD)];
                 for deg in TURNS_DEG {
-                    for (sweep, sign) in sweeps.iter_mut().zip([1.0, -1.0]) {
-                        let reach = deg.to_radians() + self.turn_field_rad;
-                        if sweep.clear_to(reach, |a| self.body_clear(&p, pose.theta + sign * a)) {
-                            let h = wrap_angle(pose.theta + sign * deg.to_radians());
+                    for sign in [1.0, -1.0] {
+                        let h = wrap_angle(pose.theta + sign * deg.to_radians());
+                        if self.turn_clear(&p, pose.theta, h) {
                             next.push((Move::Turn(h), Pose2::new(p.x, p.y, h), true));
                         }
                     }
@@ -760,15 +707,11 @@ impl<'a> Space<'a> {
             let f = Vector2::new(pose.theta.cos(), pose.theta.sin());
             for forward in [true, false] {
                 let sign = if forward { 1.0 } else { -1.0 };
-                let mut sweep = Sweep::new(RUN_STEP_M);
                 for run in runs {
-                    let reach = run + self.run_field_m;
-                    if !sweep.clear_to(reach, |d| {
-                        self.body_clear(&(p + f * (sign * d)), pose.theta)
-                    }) {
+                    let q = p + f * (sign * run);
+                    if !self.run_clear(&p, &q, pose.theta) {
                         break;
                     }
-                    let q = p + f * (sign * run);
                     let to = Pose2::new(q.x, q.y, pose.theta);
                     next.push((Move::Run { to, forward }, to, false));
                 }
@@ -870,36 +813,7 @@ fn merged(mut theta: f64, moves: Vec<Move>) -> Vec<Move> {
 mod tests {
     use super::*;
     use crate::task::WallName;
-    use std::cell::RefCell;
     use std::f64::consts::{FRAC_PI_2, PI};
-
-    #[test]
-    fn a_sweep_checks_each_pose_once_and_stops_where_one_is_held() {
-        // Held from 0.5 on: reaches of 0.25 and 0.45 are clear, 0.6 and
-        // all beyond it not; no pose is asked twice.
-        let asked = RefCell::new(Vec::new());
-        let free = |d: f64| {
-            asked.borrow_mut().push(d);
-            d < 0.5
-        };
-        let mut sweep = Sweep::new(0.1);
-        assert!(sweep.clear_to(0.25, free));
-        assert!(sweep.clear_to(0.2, free));
-        assert!(sweep.clear_to(0.45, free));
-        assert!(!sweep.clear_to(0.6, free));
-        assert!(!sweep.clear_to(0.9, free));
-        let asked = asked.into_inner();
-        let mut unique = asked.clone();
-        unique.sort_by(f64::total_cmp);
-        unique.dedup();
-        assert_eq!(asked.len(), unique.len(), "{asked:?}");
-        // At most a step apart from the start to the last reach clear.
-        assert!(
-            asked.windows(2).all(|w| w[1] - w[0] <= 0.1 + 1e-12),
-            "{asked:?}"
-        );
-        assert_eq!(asked.last().copied(), Some(0.5));
-    }
 
     fn demo_safety() -> SafetyConfig {
         SafetyConfig {
