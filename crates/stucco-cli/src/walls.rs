@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use stucco_core::{LaserSpec, Pose2, wrap_angle};
 use stucco_nav::{
-    DoorConfig, DoorOpening, FitConfig, HoughConfig, RansacConfig, RansacExtractor, RwhtConfig,
-    RwhtExtractor, ScanPoints, Wall, WallExtractor, baseline, find_doors,
+    DoorConfig, DoorOpening, FitConfig, RansacConfig, RansacExtractor, RwhtConfig, RwhtExtractor,
+    ScanPoints, Wall, WallExtractor, baseline, find_doors,
 };
 
 /// Which wall extractor `stucco walls` runs, or a study maps on.
@@ -97,32 +97,12 @@ pub(crate) fn laser_for_logs() -> LaserSpec {
     }
 }
 
-/// The robust fit's settings for scans of `laser`.
-fn fit_config(laser: &LaserSpec) -> FitConfig {
-    FitConfig {
-        noise_sigma_m: laser.range_sigma_m,
-        ..FitConfig::default()
-    }
-}
-
-/// The RWHT extractor's settings for scans of `laser`.
-fn rwht_config(laser: &LaserSpec) -> RwhtConfig {
-    RwhtConfig {
-        hough: HoughConfig {
-            surface_noise_m: laser.range_sigma_m,
-            ..HoughConfig::default()
-        },
-        fit: fit_config(laser),
-        ..RwhtConfig::default()
-    }
-}
-
 /// Builds the extractor `kind` for scans of `laser`.
 pub fn make_extractor(kind: ExtractorKind, laser: &LaserSpec) -> Result<Box<dyn WallExtractor>> {
     Ok(match kind {
-        ExtractorKind::Rwht => Box::new(RwhtExtractor::new(rwht_config(laser))?),
+        ExtractorKind::Rwht => Box::new(RwhtExtractor::new(RwhtConfig::for_laser(laser))?),
         ExtractorKind::Ransac => Box::new(RansacExtractor::new(RansacConfig {
-            fit: fit_config(laser),
+            fit: FitConfig::for_laser(laser),
             ..RansacConfig::default()
         })?),
     })
@@ -168,7 +148,7 @@ pub fn run_walls(job: &WallsJob, mut progress: impl FnMut(usize)) -> Result<Wall
             "--baseline is the RWHT extractor's previous implementation, not {}'s",
             job.extractor
         );
-        Box::new(baseline::RwhtExtractor::new(rwht_config(&laser))?)
+        Box::new(baseline::RwhtExtractor::new(RwhtConfig::for_laser(&laser))?)
     } else {
         make_extractor(job.extractor, &laser)?
     };

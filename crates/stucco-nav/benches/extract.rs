@@ -11,9 +11,9 @@ use std::hint::black_box;
 use std::time::Duration;
 use stucco_core::{LaserSpec, Pose2, Stamp, Twist2};
 use stucco_nav::{
-    DoorConfig, FitConfig, HoughConfig, HoughTransform, RansacConfig, RansacExtractor, RoomConfig,
-    RoomSearch, RwhtConfig, RwhtExtractor, ScanPoints, WallExtractor, Weighting, baseline,
-    find_doors, synthetic,
+    FitConfig, HoughConfig, HoughTransform, RansacConfig, RansacExtractor, RoomConfig, RoomSearch,
+    RwhtConfig, RwhtExtractor, ScanPoints, WallExtractor, Weighting, baseline, find_doors,
+    synthetic,
 };
 
 /// Robot poses (and rooms) per scan set.
@@ -71,10 +71,7 @@ fn extract(c: &mut Criterion) {
     ] {
         let scans = scans(&spec);
         assert!(scans.iter().all(|s| !s.is_empty()), "{group}: empty scan");
-        let fit = FitConfig {
-            noise_sigma_m: spec.range_sigma_m,
-            ..FitConfig::default()
-        };
+        let fit = FitConfig::for_laser(&spec);
         let mut g = c.benchmark_group(group);
 
         let mut rwht = RwhtExtractor::new(RwhtConfig {
@@ -148,23 +145,7 @@ fn fr079(c: &mut Criterion) {
         eprintln!("{} not found: fr079 not benched", log.display());
         return;
     };
-    // As `stucco walls` tunes them for the SICK scanners of the logs.
-    let laser = LaserSpec {
-        range_sigma_m: 0.015,
-        ..LaserSpec::sick_lms291()
-    };
-    let config = RwhtConfig {
-        hough: HoughConfig {
-            surface_noise_m: laser.range_sigma_m,
-            ..HoughConfig::default()
-        },
-        fit: FitConfig {
-            noise_sigma_m: laser.range_sigma_m,
-            ..FitConfig::default()
-        },
-        ..RwhtConfig::default()
-    };
-    let doors = DoorConfig::for_laser(&laser);
+    let (config, doors) = common::log_settings();
     let mut g = c.benchmark_group("walls/fr079");
     let mut points = ScanPoints::default();
     let mut rwht = RwhtExtractor::new(config.clone()).expect("valid RWHT settings");

@@ -13,7 +13,7 @@ use crate::points::ScanPoint;
 use crate::wall::Wall;
 use nalgebra::{Matrix2, Point2, Vector2};
 use serde::{Deserialize, Serialize};
-use stucco_core::wrap_angle;
+use stucco_core::{LaserSpec, wrap_angle};
 
 /// Settings of the robust line fit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -41,6 +41,16 @@ pub struct FitConfig {
     pub end_gap_m: f64,
     /// …when they would lengthen it by more than this share of the rest.
     pub end_growth_max: f64,
+}
+
+impl FitConfig {
+    /// The fit for scans of `laser`: its noise the laser's range σ.
+    pub fn for_laser(laser: &LaserSpec) -> Self {
+        FitConfig {
+            noise_sigma_m: laser.range_sigma_m,
+            ..FitConfig::default()
+        }
+    }
 }
 
 impl Default for FitConfig {

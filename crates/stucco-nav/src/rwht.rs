@@ -15,6 +15,7 @@ use crate::points::{ScanPoint, ScanPoints};
 use crate::segments::{Segment, SegmentTransform, Segmenter};
 use crate::wall::Wall;
 use serde::{Deserialize, Serialize};
+use stucco_core::LaserSpec;
 
 /// Settings of the RWHT extractor.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -43,6 +44,21 @@ pub struct RwhtConfig {
     /// farther than this either side, rad: a short run's direction says
     /// little, and spread over many rows its votes would add to no peak.
     pub segment_reach_rad: f64,
+}
+
+impl RwhtConfig {
+    /// The extractor for scans of `laser`: the transform's surface noise
+    /// and the fit's noise the laser's range σ.
+    pub fn for_laser(laser: &LaserSpec) -> Self {
+        RwhtConfig {
+            hough: HoughConfig {
+                surface_noise_m: laser.range_sigma_m,
+                ..HoughConfig::default()
+            },
+            fit: FitConfig::for_laser(laser),
+            ..RwhtConfig::default()
+        }
+    }
 }
 
 impl Default for RwhtConfig {

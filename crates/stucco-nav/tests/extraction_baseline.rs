@@ -14,8 +14,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use stucco_core::{LaserSpec, Scan, Stamp, Twist2, wrap_angle};
 use stucco_nav::{
-    DoorConfig, DoorOpening, FitConfig, HoughConfig, RwhtConfig, RwhtExtractor, ScanPoints, Wall,
-    WallExtractor, baseline, find_doors, find_doors_moving, synthetic,
+    DoorConfig, DoorOpening, FitConfig, RwhtConfig, RwhtExtractor, ScanPoints, Wall, WallExtractor,
+    baseline, find_doors, find_doors_moving, synthetic,
 };
 
 /// Every number of a wall, as bits.
@@ -92,27 +92,6 @@ impl Comparison {
     }
 }
 
-/// Extraction tuned to the SICK scanners of the CARMEN logs, as `stucco
-/// walls` runs it.
-fn log_settings() -> (RwhtConfig, DoorConfig) {
-    let laser = LaserSpec {
-        range_sigma_m: 0.015,
-        ..LaserSpec::sick_lms291()
-    };
-    let rwht = RwhtConfig {
-        hough: HoughConfig {
-            surface_noise_m: laser.range_sigma_m,
-            ..HoughConfig::default()
-        },
-        fit: FitConfig {
-            noise_sigma_m: laser.range_sigma_m,
-            ..FitConfig::default()
-        },
-        ..RwhtConfig::default()
-    };
-    (rwht, DoorConfig::for_laser(&laser))
-}
-
 /// Both implementations over `scans`, each with its own extractor kept
 /// from scan to scan (as `stucco walls` keeps one), the points deskewed
 /// for `twist`.
@@ -142,7 +121,7 @@ fn compare(scans: &[Scan], twist: &Twist2, rwht: &RwhtConfig, doors: &DoorConfig
 
 #[test]
 fn walls_and_doors_of_real_logs_are_the_baselines_bit_for_bit() {
-    let (rwht, doors) = log_settings();
+    let (rwht, doors) = common::log_settings();
     let mut logs: Vec<_> = [
         "freiburg-101-corrected.log.gz",
         "intel-corrected.log.gz",
@@ -186,10 +165,7 @@ fn walls_and_doors_of_synthetic_scans_are_the_baselines_bit_for_bit() {
     ] {
         let laser = synthetic::SyntheticLaser::new(spec.clone());
         let rwht = RwhtConfig {
-            fit: FitConfig {
-                noise_sigma_m: spec.range_sigma_m,
-                ..FitConfig::default()
-            },
+            fit: FitConfig::for_laser(&spec),
             ..RwhtConfig::default()
         };
         let doors = DoorConfig::for_laser(&spec);
@@ -213,7 +189,7 @@ fn walls_and_doors_of_synthetic_scans_are_the_baselines_bit_for_bit() {
 
 #[test]
 fn the_comparison_sees_a_single_bit() {
-    let (rwht, doors) = log_settings();
+    let (rwht, doors) = common::log_settings();
     let scans = flaser_scans(&repo_log("freiburg-101-corrected.log.gz")).unwrap();
     let mut extractor = RwhtExtractor::new(rwht).unwrap();
     let points = ScanPoints::from_scan(&scans[0]);
