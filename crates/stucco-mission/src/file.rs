@@ -543,7 +543,7 @@ impl Mission {
                     tasks.push(TaskSpec::go_to_room(&plan.rooms()[room].name));
                     task_rooms.push(share.clone());
                 }
-                tasks.push(TaskSpec::map_room());
+                tasks.push(TaskSpec::map_room_to_plaster());
                 tasks.push(each.clone());
                 task_rooms.extend([share.clone(), share]);
                 here = Some(room);

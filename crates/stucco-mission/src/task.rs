@@ -25,7 +25,9 @@ pub fn spray_with(base: &SprayTool, settings: &SpraySettings) -> Result<SprayToo
     serde_json::from_value(tool).map_err(|e| e.to_string())
 }
 
-/// What a [`TaskSpec::WaitForOperator`] does when nobody answers in time.
+/// What a [`TaskSpec::WaitForOperator`] does when nobody answers in time,
+/// and a [`TaskSpec::MapRoom`] when its time is up with every wall seen
+/// but the room's size not yet known to its bound.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OnTimeout {
@@ -110,6 +112,13 @@ pub enum TaskSpec {
         /// Fails after this long, s.
         #[serde(default = "map_timeout")]
         timeout_s: f64,
+        /// At the timeout, every wall seen but the size not yet known to
+        /// `max_size_sigma_m`: fail (by default), or be done with the
+        /// size as known then (a `room_size_loose` event tells how well).
+        /// A job from the drawing goes on: the plaster task sprays only
+        /// where the robot's place is known to its own bound.
+        #[serde(default)]
+        on_loose_size: OnTimeout,
     },
     /// Stands still until the pose is known to `max_sigma_m` in the known
     /// map.
@@ -321,7 +330,20 @@ impl TaskSpec {
             speed_mps: survey_speed(),
             max_size_sigma_m: size_sigma(),
             timeout_s: map_timeout(),
+            on_loose_size: OnTimeout::default(),
         }
+    }
+
+    /// The `map_room` a job from the drawing puts before each room's
+    /// plastering: [`TaskSpec::map_room`], but a room whose walls are all
+    /// seen is not given up for a size known a few millimetres less well
+    /// than asked (the plaster task guards its spraying itself).
+    pub fn map_room_to_plaster() -> TaskSpec {
+        let mut task = TaskSpec::map_room();
+        if let TaskSpec::MapRoom { on_loose_size, .. } = &mut task {
+            *on_loose_size = OnTimeout::Continue;
+        }
+        task
     }
 
     /// The task a telecommand asks for, with the defaults a mission file

@@ -725,6 +725,7 @@ fn map_room(path: Option<Vec<[f64; 2]>>) -> TaskSpec {
         speed_mps: 0.4,
         max_size_sigma_m: 0.005,
         timeout_s: 120.0,
+        on_loose_size: OnTimeout::Fail,
     }
 }
 
@@ -822,6 +823,7 @@ fn map_room_held_between_corners_with_the_room_known_is_done_at_its_timeout() {
         speed_mps: 0.4,
         max_size_sigma_m: 0.005,
         timeout_s: 20.0,
+        on_loose_size: OnTimeout::Fail,
     };
     let mut exec = executive(vec![spec], true);
     let mut held = 0;
@@ -849,6 +851,60 @@ fn map_room_held_between_corners_with_the_room_known_is_done_at_its_timeout() {
     }
     assert!(held > 0, "never held");
     assert_eq!(exec.mode(), &MissionMode::Done);
+}
+
+/// A room whose walls are all seen but whose size stays known to 6 mm
+/// only: `map_room` fails at its timeout by default, naming how well the
+/// size is known; with `on_loose_size = "continue"` (a job from the
+/// drawing) it is done then instead, and an event tells how well.
+#[test]
+fn map_room_with_the_size_loose_at_its_timeout_fails_or_goes_on_as_asked() {
+    for on_loose_size in [OnTimeout::Fail, OnTimeout::Continue] {
+        let mut robot = Robot::at(Pose2::new(1.0, 1.0, 0.0));
+        robot.room_sigma = [0.006; 2];
+        let mut spec = map_room(Some(LOOP.to_vec()));
+        if let TaskSpec::MapRoom {
+            timeout_s,
+            on_loose_size: on,
+            ..
+        } = &mut spec
+        {
+            (*timeout_s, *on) = (20.0, on_loose_size);
+        }
+        let mut exec = executive(vec![spec], true);
+        let mut events = Vec::new();
+        for _ in 0..(60.0 / DT) as usize {
+            let out = ask(&mut exec, &robot, Seen::default());
+            events.extend(out.events);
+            robot.drive(out.drive);
+            if exec.mode().is_final() {
+                break;
+            }
+        }
+        let told = events.iter().find_map(|e| match e.kind {
+            EventKind::RoomSizeLoose { task, sigma_m } => Some((task, sigma_m)),
+            _ => None,
+        });
+        let failure = events.iter().find_map(|e| match &e.kind {
+            EventKind::TaskFailed { failure, .. } => Some(failure.clone()),
+            _ => None,
+        });
+        match on_loose_size {
+            OnTimeout::Fail => {
+                assert!(
+                    matches!(failure, Some(TaskFailure::RoomSizeLoose { sigma_m, .. }) if (sigma_m - 0.006).abs() < 1e-9),
+                    "{failure:?}"
+                );
+                assert!(told.is_none());
+            }
+            OnTimeout::Continue => {
+                assert_eq!(exec.mode(), &MissionMode::Done, "{failure:?}");
+                let (task, sigma_m) = told.expect("no room_size_loose event");
+                assert_eq!(task, 0);
+                assert!((sigma_m - 0.006).abs() < 1e-9, "{sigma_m}");
+            }
+        }
+    }
 }
 
 // ---- Telecommands --------------------------------------------------------

@@ -202,6 +202,15 @@ pub enum EventKind {
         /// The walls.
         walls: Vec<WallName>,
     },
+    /// `map_room`'s time is up with every wall seen but the room's size
+    /// known less well than it asked; it is done with the size as known
+    /// (its `on_loose_size` is `continue`, as in a job from the drawing).
+    RoomSizeLoose {
+        /// The task.
+        task: usize,
+        /// How well the size is known: the loosest wall's place, m (σ).
+        sigma_m: f64,
+    },
     /// A plastering plan was made (again, after a survey).
     PlanMade {
         /// The task.
@@ -249,6 +258,7 @@ impl EventKind {
             EventKind::PassDone { .. } => "pass_done",
             EventKind::RoomEntered { .. } => "room_entered",
             EventKind::WallsHidden { .. } => "walls_hidden",
+            EventKind::RoomSizeLoose { .. } => "room_size_loose",
             EventKind::PlanMade { .. } => "plan_made",
             EventKind::CommandRefused { .. } => "command_refused",
         }

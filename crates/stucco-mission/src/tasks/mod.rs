@@ -249,6 +249,7 @@ impl TaskSpec {
                 speed_mps,
                 max_size_sigma_m,
                 timeout_s,
+                on_loose_size,
             } => Box::new(survey::MapRoom::new(
                 path,
                 walls,
@@ -256,6 +257,7 @@ impl TaskSpec {
                 speed_mps,
                 max_size_sigma_m,
                 timeout_s,
+                on_loose_size,
             )),
             TaskSpec::Localize {
                 max_sigma_m,

@@ -7,7 +7,7 @@ use crate::behaviour::{Behaviour, BehaviourKind, go_to};
 use crate::executive::{EventKind, ExecutiveConfig};
 use crate::manoeuvre::Space;
 use crate::model::{Estimate, WallGeometry, anchor_wall, wall_sigma, walls_or_all};
-use crate::task::WallName;
+use crate::task::{OnTimeout, WallName};
 use crate::views::{NoView, Sight, Spent, View, next_view};
 use stucco_core::{DriveCommand, Obstacle, Pose2, VehicleSpec};
 use stucco_plan::Outline;
@@ -28,6 +28,7 @@ pub(crate) struct MapRoom {
     speed_mps: f64,
     max_size_sigma_m: f64,
     timeout_s: f64,
+    on_loose_size: OnTimeout,
     ways: Behaviours,
     /// The loop driven corner to corner.
     legs: Option<Legs>,
@@ -79,6 +80,7 @@ impl MapRoom {
         speed_mps: f64,
         max_size_sigma_m: f64,
         timeout_s: f64,
+        on_loose_size: OnTimeout,
     ) -> Self {
         MapRoom {
             path,
@@ -87,6 +89,7 @@ impl MapRoom {
             speed_mps,
             max_size_sigma_m,
             timeout_s,
+            on_loose_size,
             ways: Behaviours::default(),
             legs: None,
             looked: Vec::new(),
@@ -362,15 +365,28 @@ impl Task for MapRoom {
             return TaskStep::Done;
         }
         if elapsed > timeout_s {
-            return TaskStep::Failed(if self.legs.as_ref().is_some_and(Legs::stuck) {
+            let stuck = self.legs.as_ref().is_some_and(Legs::stuck);
+            let sigma_m = loose.iter().fold(0.0f64, |m, &s| m.max(s));
+            // Every wall seen, only the size loose: done with it as known
+            // when the task says so (the plaster task after it guards its
+            // own spraying).
+            if !stuck
+                && self.looks.stuck_on.is_none()
+                && unseen.is_empty()
+                && self.on_loose_size == OnTimeout::Continue
+            {
+                cx.emit(EventKind::RoomSizeLoose {
+                    task: cx.index,
+                    sigma_m,
+                });
+                return TaskStep::Done;
+            }
+            return TaskStep::Failed(if stuck {
                 TaskFailure::NoWayToCorners
             } else if self.looks.stuck_on.is_some() {
                 TaskFailure::NoWayToViews
             } else if unseen.is_empty() {
-                TaskFailure::RoomSizeLoose {
-                    sigma_m: loose.iter().fold(0.0f64, |m, &s| m.max(s)),
-                    timeout_s,
-                }
+                TaskFailure::RoomSizeLoose { sigma_m, timeout_s }
             } else {
                 TaskFailure::WallsNotSeen {
                     walls: unseen,
