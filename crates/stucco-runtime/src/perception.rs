@@ -238,6 +238,10 @@ struct FloorMap {
     odds: Vec<f32>,
     /// Bumped each time a cell becomes occupied or stops being.
     version: usize,
+    /// The cells the body has stood on, wholly: floor known free of
+    /// anything standing, whatever the echoes round it suggest (a table's
+    /// top between two posts the robot drove between).
+    stood: Vec<bool>,
 }
 
 /// A floor cell's log-odds rises this much with an echo in it...
@@ -262,7 +266,63 @@ impl FloorMap {
             cells,
             odds: vec![0.0; cells[0] * cells[1]],
             version: 0,
+            stood: vec![false; cells[0] * cells[1]],
         }
+    }
+
+    /// Notes the cells wholly under the body at `pose`, `body` its reach
+    /// behind the rear axle, ahead of it and half its width, m. The cells
+    /// must lie a cell's width inside its outline, which takes the
+    /// estimate's error (millimetres) and the cell's diagonal.
+    fn stand(&mut self, pose: &Pose2, body: &[f64; 3]) {
+        let [rear, front, half] = *body;
+        let inset = FLOOR_CELL_M;
+        let (back, ahead, side) = (-rear + inset, front - inset, half - inset);
+        if back >= ahead || side <= 0.0 {
+            return;
+        }
+        let outline = [
+            Point2::new(back, -side),
+            Point2::new(ahead, -side),
+            Point2::new(ahead, side),
+            Point2::new(back, side),
+        ]
+        .map(|c| pose.transform_point(&c));
+        let (lo, hi) = outline.iter().fold(
+            ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN)),
+            |(lo, hi), c| {
+                let k = Self::cell(c);
+                (
+                    (lo.0.min(k.0), lo.1.min(k.1)),
+                    (hi.0.max(k.0), hi.1.max(k.1)),
+                )
+            },
+        );
+        let inverse = pose.inverse();
+        for j in lo.1..=hi.1 {
+            for i in lo.0..=hi.0 {
+                let middle = Point2::new(i as f64 + 0.5, j as f64 + 0.5) * FLOOR_CELL_M;
+                let q = inverse.transform_point(&middle);
+                if (back..=ahead).contains(&q.x)
+                    && (-side..=side).contains(&q.y)
+                    && let Some(k) = self.index((i, j))
+                {
+                    self.stood[k] = true;
+                }
+            }
+        }
+    }
+
+    /// True when the body has stood on a cell of the box from `min` to
+    /// `max`, m.
+    fn stood_in(&self, min: [f64; 2], max: [f64; 2]) -> bool {
+        let first = Self::cell(&Point2::from(min));
+        let last = (
+            (max[0] / FLOOR_CELL_M).ceil() as i64 - 1,
+            (max[1] / FLOOR_CELL_M).ceil() as i64 - 1,
+        );
+        (first.1..=last.1)
+            .any(|j| (first.0..=last.0).any(|i| self.index((i, j)).is_some_and(|k| self.stood[k])))
     }
 
     /// The grid index of cell `c`, if the grid holds it.
@@ -648,17 +708,19 @@ impl Perception {
             let leg = (max[0] - min[0]).max(max[1] - min[1]) < LEG_M;
             let (mut min, mut max) = (min, max);
             // The laser sees a face: what lies between it and a wall less
-            // than a metre behind is taken as part of it.
-            if min[0] < 1.0 {
+            // than a metre behind is taken as part of it, unless the body
+            // stood there (it drove behind the piece).
+            let floor = &self.room.floor;
+            if min[0] < 1.0 && !floor.stood_in([0.0, min[1]], [min[0], max[1]]) {
                 min[0] = 0.0;
             }
-            if min[1] < 1.0 {
+            if min[1] < 1.0 && !floor.stood_in([min[0], 0.0], [max[0], min[1]]) {
                 min[1] = 0.0;
             }
-            if max[0] > xs - 1.0 {
+            if max[0] > xs - 1.0 && !floor.stood_in([max[0], min[1]], [xs, max[1]]) {
                 max[0] = xs;
             }
-            if max[1] > ys - 1.0 {
+            if max[1] > ys - 1.0 && !floor.stood_in([min[0], max[1]], [max[0], ys]) {
                 max[1] = ys;
             }
             out.push((
@@ -670,7 +732,7 @@ impl Perception {
                 leg,
             ));
         }
-        merge_furniture(&mut out);
+        merge_furniture(&mut out, |min, max| self.room.floor.stood_in(min, max));
         out.into_iter().map(|(o, _)| o).collect()
     }
 
@@ -696,6 +758,7 @@ impl Perception {
             * Twist2::new(-twist.vx_mps, -twist.vy_mps, -twist.omega_radps).displacement(back);
         let laser = then * self.mount;
         let from = laser.position();
+        self.room.floor.stand(&est.pose, &self.body);
         for (q, moving) in pts.points().iter().zip(moving) {
             let p = laser.transform_point(&q.p);
             // Every beam clears what it passed; an echo off the walls
@@ -1564,7 +1627,12 @@ fn box_of_two_is_them(a: &Obstacle, b: &Obstacle) -> bool {
 /// ways as the laser saw it, before it was stretched to a wall) with
 /// legs, join over a table's span: what stands on them (a table's top) is
 /// above the laser's plane.
-fn merge_furniture(out: &mut Vec<(Obstacle, bool)>) {
+/// No two join whose box holds floor the body stood on (`stood` of the
+/// box's corners): what stands there is known not to be one piece. Two
+/// posts and a table 1.6 m apart took in the floor inside a doorway the
+/// robot had come through, and it stood in a box of its own map, every
+/// way held.
+fn merge_furniture(out: &mut Vec<(Obstacle, bool)>, stood: impl Fn([f64; 2], [f64; 2]) -> bool) {
     let thin = |o: &Obstacle| (o.max_m[0] - o.min_m[0]).min(o.max_m[1] - o.min_m[1]) < LEG_M;
     loop {
         let pair = (0..out.len())
@@ -1579,7 +1647,12 @@ fn merge_furniture(out: &mut Vec<(Obstacle, bool)>) {
                     .max(0.0);
                 let gap = dx.hypot(dy);
                 let legs = (thin(a) || *a_leg) && (thin(b) || *b_leg);
-                (gap < FURNITURE_GAP_M && box_of_two_is_them(a, b)) || (legs && gap < TABLE_SPAN_M)
+                ((gap < FURNITURE_GAP_M && box_of_two_is_them(a, b))
+                    || (legs && gap < TABLE_SPAN_M))
+                    && !stood(
+                        [a.min_m[0].min(b.min_m[0]), a.min_m[1].min(b.min_m[1])],
+                        [a.max_m[0].max(b.max_m[0]), a.max_m[1].max(b.max_m[1])],
+                    )
             });
         let Some((i, j)) = pair else {
             break;
@@ -1614,7 +1687,7 @@ mod tests {
             piece([0.0, 0.6], [0.85, 2.4]),
             piece([0.0, 2.44], [0.66, 2.85]),
         ];
-        merge_furniture(&mut out);
+        merge_furniture(&mut out, |_, _| false);
         assert_eq!(out.len(), 1);
         assert_eq!(out[0].0.min_m, [0.0, 0.6]);
         assert_eq!(out[0].0.max_m, [0.85, 2.85]);
@@ -1626,7 +1699,27 @@ mod tests {
             piece([0.0, 1.75], [2.2, 3.65]),
             piece([2.3, 1.0], [4.0, 2.15]),
         ];
-        merge_furniture(&mut out);
+        merge_furniture(&mut out, |_, _| false);
+        assert_eq!(out.len(), 2);
+    }
+
+    #[test]
+    fn legs_join_over_a_tables_span_unless_the_body_stood_between() {
+        let legs = || {
+            vec![
+                (piece([1.0, 1.0], [1.1, 1.1]).0, true),
+                (piece([1.0, 2.3], [1.1, 2.4]).0, true),
+            ]
+        };
+        let mut out = legs();
+        merge_furniture(&mut out, |_, _| false);
+        assert_eq!(out.len(), 1);
+        // The body stood at (1.05, 1.7): the box of the two holds it.
+        let stood = |min: [f64; 2], max: [f64; 2]| {
+            (min[0]..=max[0]).contains(&1.05) && (min[1]..=max[1]).contains(&1.7)
+        };
+        let mut out = legs();
+        merge_furniture(&mut out, stood);
         assert_eq!(out.len(), 2);
     }
 
@@ -1816,6 +1909,49 @@ mod tests {
     /// on one spot before they turn back) is not mapped where they wait:
     /// followed since they walked, they are a mover standing. Mapped,
     /// they were kept behind a robot that turned away from them.
+    /// Two posts 1.1 m apart, thin as a table's legs, are taken for one
+    /// table while the robot stands before them (what stands on legs is
+    /// above the laser); once it has driven between them they are two,
+    /// and no piece holds the floor it drove over.
+    #[test]
+    fn posts_the_robot_drove_between_are_no_table() {
+        let post = |y: f64| stucco_sim::ColumnSpec {
+            at: [2.9, y],
+            radius_m: 0.04,
+            height_m: 2.0,
+        };
+        let (mut robot, start) = at_the_apartments_start_with(5, |w| {
+            w.columns = vec![post(0.45), post(1.55)];
+        });
+        let by_the_posts = |robot: &Robot<Simulator>| {
+            robot
+                .perception()
+                .floor_obstacles()
+                .into_iter()
+                .filter(|o| o.min_m[0] < 3.0 && o.max_m[0] > 2.8)
+                .collect::<Vec<_>>()
+        };
+        for _ in 0..(4.0 / DT_S) as usize {
+            drive(&mut robot, 0.0, 0.0);
+        }
+        let before = by_the_posts(&robot);
+        assert_eq!(before.len(), 1, "one table before driving: {before:?}");
+        assert!(before[0].min_m[1] < start.y && before[0].max_m[1] > start.y);
+        let mut end = start;
+        for _ in 0..(6.0 / DT_S) as usize {
+            end = drive(&mut robot, 0.3, 0.0);
+        }
+        assert!(end.x > 3.4, "the robot drove past the posts: {end:?}");
+        let after = by_the_posts(&robot);
+        assert_eq!(after.len(), 2, "two posts once driven between: {after:?}");
+        for o in &after {
+            assert!(
+                o.max_m[1] < start.y - 0.3 || o.min_m[1] > start.y + 0.3,
+                "a piece holds the floor driven over: {after:?}"
+            );
+        }
+    }
+
     #[test]
     fn a_person_waiting_for_the_robot_is_not_mapped() {
         let walker = stucco_sim::PersonSpec {
