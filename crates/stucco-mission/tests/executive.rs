@@ -872,15 +872,7 @@ fn map_room_with_the_size_loose_at_its_timeout_fails_or_goes_on_as_asked() {
             (*timeout_s, *on) = (20.0, on_loose_size);
         }
         let mut exec = executive(vec![spec], true);
-        let mut events = Vec::new();
-        for _ in 0..(60.0 / DT) as usize {
-            let out = ask(&mut exec, &robot, Seen::default());
-            events.extend(out.events);
-            robot.drive(out.drive);
-            if exec.mode().is_final() {
-                break;
-            }
-        }
+        let events = run(&mut exec, &mut robot, 60.0, |_, _| Vec::new());
         let told = events.iter().find_map(|e| match e.kind {
             EventKind::RoomSizeLoose { task, sigma_m } => Some((task, sigma_m)),
             _ => None,
