@@ -793,7 +793,8 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Re
     let parsed = toml::from_str(text).map_err(|e| {
         let (line, column) = e
             .span()
-            .map(|s| stucco_core::line_column(text, s.start))
+            .map(|s| named_place(text, s.start, e.message()).unwrap_or(s.start))
+            .map(|at| stucco_core::line_column(text, at))
             .unwrap_or((0, 0));
         let key = text
             .lines()
@@ -818,6 +819,38 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Re
         ))),
         None => Ok(parsed),
     }
+}
+
+/// Where the value or key an error names is written, at or after `start`.
+/// serde reads a table tagged by one of its keys (a `[[task]]`) from a copy
+/// that keeps no places, so toml puts a fault in any task at the first
+/// `[[task]]`; the unknown value or key the message names, first written
+/// after that, is the fault's place. `None` when the message names none, or
+/// it is written on `start`'s own line (the place is right already).
+fn named_place(text: &str, start: usize, message: &str) -> Option<usize> {
+    let named = |kind: &str| {
+        let rest = &message[message.find(kind)? + kind.len()..];
+        rest.find('`').map(|end| &rest[..end])
+    };
+    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+    let after = |pattern: &str| text[start..].find(pattern).map(|i| start + i);
+    let at = if let Some(value) = named("unknown variant `") {
+        after(&format!("\"{value}\"")).or_else(|| after(&format!("'{value}'")))?
+    } else {
+        let key = named("unknown field `")?;
+        text[start..]
+            .match_indices(key)
+            .map(|(i, _)| start + i)
+            .find(|&i| {
+                let before = text[..i].chars().next_back();
+                let boundary = before.is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+                boundary
+                    && text[i + key.len()..]
+                        .trim_start_matches([' ', '\t'])
+                        .starts_with('=')
+            })?
+    };
+    (at > line_end).then_some(at)
 }
 
 /// The line of `key` in `table` (`""`: the top level; its sub-tables count
@@ -918,6 +951,35 @@ spray = { thickness_mm = 5.0, flow_l_per_min = 6.0 }
         let text = format!("{TWO_COATS}\n[failsafe]\non_task_failure = \"continue\"\n");
         let m = Mission::parse(&text, Path::new("policy.toml")).expect("a mission");
         assert_eq!(m.failsafe.on_task_failure, crate::FailurePolicy::Continue);
+    }
+
+    #[test]
+    fn a_loose_size_policy_it_does_not_know_is_named_with_its_line() {
+        let task = |policy: &str| {
+            format!("{TWO_COATS}\n[[task]]\ntask = \"map_room\"\non_loose_size = \"{policy}\"\n")
+        };
+        let text = task("spray_anyway");
+        let line = text.lines().count();
+        let e = Mission::parse(&text, Path::new("loose.toml"))
+            .expect_err("no such policy")
+            .to_string();
+        assert!(e.starts_with(&format!("loose.toml:{line}:")), "{e}");
+        assert!(e.contains("spray_anyway"), "{e}");
+        assert!(e.contains("on_loose_size"), "{e}");
+        // A key no task has, in the third task: named there, not at the first.
+        let text = task("continue").replace("on_loose_size", "on_loose_sise");
+        let e = Mission::parse(&text, Path::new("loose.toml"))
+            .expect_err("no such key")
+            .to_string();
+        assert!(e.starts_with(&format!("loose.toml:{line}:")), "{e}");
+        assert!(e.contains("on_loose_sise"), "{e}");
+        let m = Mission::parse(&task("continue"), Path::new("loose.toml")).expect("a mission");
+        match m.tasks.last() {
+            Some(TaskSpec::MapRoom { on_loose_size, .. }) => {
+                assert_eq!(*on_loose_size, crate::OnTimeout::Continue)
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     /// A hall and an office drawn by their corners (the office's each off
