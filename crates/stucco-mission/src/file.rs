@@ -939,14 +939,21 @@ spray = { thickness_mm = 5.0, flow_l_per_min = 6.0 }
         assert!(e.contains("flow_l_per_min"), "{e}");
     }
 
+    /// The error a mission whose fault is on its last line is refused
+    /// with, named `file` and that line.
+    fn refused_at_last_line(text: &str, file: &str) -> String {
+        let e = Mission::parse(text, Path::new(file))
+            .expect_err("a fault on the last line")
+            .to_string();
+        let line = text.lines().count();
+        assert!(e.starts_with(&format!("{file}:{line}:")), "{e}");
+        e
+    }
+
     #[test]
     fn a_failure_policy_it_does_not_know_is_named_with_its_line() {
         let text = format!("{TWO_COATS}\n[failsafe]\non_task_failure = \"carry_on\"\n");
-        let line = text.lines().count();
-        let e = Mission::parse(&text, Path::new("policy.toml"))
-            .expect_err("no such policy")
-            .to_string();
-        assert!(e.starts_with(&format!("policy.toml:{line}:")), "{e}");
+        let e = refused_at_last_line(&text, "policy.toml");
         assert!(e.contains("carry_on"), "{e}");
         let text = format!("{TWO_COATS}\n[failsafe]\non_task_failure = \"continue\"\n");
         let m = Mission::parse(&text, Path::new("policy.toml")).expect("a mission");
@@ -958,20 +965,14 @@ spray = { thickness_mm = 5.0, flow_l_per_min = 6.0 }
         let task = |policy: &str| {
             format!("{TWO_COATS}\n[[task]]\ntask = \"map_room\"\non_loose_size = \"{policy}\"\n")
         };
-        let text = task("spray_anyway");
-        let line = text.lines().count();
-        let e = Mission::parse(&text, Path::new("loose.toml"))
-            .expect_err("no such policy")
-            .to_string();
-        assert!(e.starts_with(&format!("loose.toml:{line}:")), "{e}");
-        assert!(e.contains("spray_anyway"), "{e}");
-        assert!(e.contains("on_loose_size"), "{e}");
+        let e = refused_at_last_line(&task("spray_anyway"), "loose.toml");
+        assert!(
+            e.contains("spray_anyway") && e.contains("on_loose_size"),
+            "{e}"
+        );
         // A key no task has, in the third task: named there, not at the first.
         let text = task("continue").replace("on_loose_size", "on_loose_sise");
-        let e = Mission::parse(&text, Path::new("loose.toml"))
-            .expect_err("no such key")
-            .to_string();
-        assert!(e.starts_with(&format!("loose.toml:{line}:")), "{e}");
+        let e = refused_at_last_line(&text, "loose.toml");
         assert!(e.contains("on_loose_sise"), "{e}");
         let m = Mission::parse(&task("continue"), Path::new("loose.toml")).expect("a mission");
         match m.tasks.last() {
